@@ -1,0 +1,3 @@
+from pysim.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,345 @@
+"""Case and pipeline configuration: loading, validation, expansion into runs.
+
+A *case* (``schemas/case.schema.yaml``) is one physical system and protocol; a
+*configuration* (``schemas/config.schema.yaml``) lists studies, each a base case with
+named variants, engines and seeds. Everything is validated before anything runs;
+a bad value raises :class:`ConfigError` whose message is one line naming the file,
+the key, the value and what is allowed.
+"""
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import math
+import re
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+
+import jsonschema
+import yaml
+
+SCHEMA_DIR = Path(__file__).resolve().parent / "schemas"
+ENGINES = ("pysim", "lammps", "liggghts")
+#: RSA saturates near 0.38 for spheres; insertion is refused above this
+PHI_INSERT_MAX = 0.35
+#: time step must stay below this fraction of the binary contact time
+DT_MAX_FRACTION = 0.1
+#: column names of case parameters in tidy tables (science.md symbols)
+PARAMETER_NAMES = {
+    "protocol.rate": "kappa",
+    "particles.diameter.sigma": "sigma",
+    "particles.aspect_ratio": "alpha",
+}
+
+
+class ConfigError(ValueError):
+    """A configuration or case file is invalid; the message is one line."""
+
+
+class _Loader(yaml.SafeLoader):
+    """YAML loader that reads ``1e5`` and ``1.0e-3`` as numbers (plain YAML 1.1 would
+    read ``1.0e5`` as a string)."""
+
+
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
+                  |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
+                  |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
+                  |[-+]?\.(?:inf|Inf|INF)
+                  |\.(?:nan|NaN|NAN))$""", re.X),
+    list("-+0123456789."))
+
+
+def read_yaml(path):
+    """Load a YAML file with :class:`_Loader`; errors become one-line :class:`ConfigError`."""
+    path = Path(path)
+    try:
+        with open(path) as fh:
+            return yaml.load(fh, Loader=_Loader)
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such file") from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f":{mark.line + 1}" if mark else ""
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise ConfigError(f"{path}{where}: not valid YAML: {problem}") from None
+
+
+def _load_schema(name: str) -> dict:
+    with open(SCHEMA_DIR / name) as fh:
+        return yaml.safe_load(fh)
+
+
+def _with_defaults(validator_class):
+    """A validator that also fills in ``default`` values of missing properties."""
+    validate_properties = validator_class.VALIDATORS["properties"]
+
+    def set_defaults(validator, properties, instance, schema):
+        if isinstance(instance, dict):
+            for prop, sub in properties.items():
+                if "default" in sub and prop not in instance:
+                    instance[prop] = copy.deepcopy(sub["default"])
+        yield from validate_properties(validator, properties, instance, schema)
+
+    return jsonschema.validators.extend(validator_class, {"properties": set_defaults})
+
+
+_Validator = _with_defaults(jsonschema.Draft202012Validator)
+
+
+def _allowed(error) -> str:
+    s = error.schema
+    v = error.validator
+    if v == "enum":
+        return "one of " + ", ".join(repr(x) for x in s["enum"])
+    if v == "type":
+        return f"a value of type {s['type']}"
+    if v in ("minimum", "exclusiveMinimum", "maximum", "exclusiveMaximum"):
+        parts = []
+        if "minimum" in s:
+            parts.append(f">= {s['minimum']}")
+        if "exclusiveMinimum" in s:
+            parts.append(f"> {s['exclusiveMinimum']}")
+        if "maximum" in s:
+            parts.append(f"<= {s['maximum']}")
+        if "exclusiveMaximum" in s:
+            parts.append(f"< {s['exclusiveMaximum']}")
+        return "a number " + " and ".join(parts)
+    if v == "additionalProperties":
+        allowed = sorted(s.get("properties", {}))
+        return "only the keys " + ", ".join(allowed) if allowed else "no other keys"
+    if v == "required":
+        return "the keys " + ", ".join(s["required"])
+    if v in ("minItems", "maxItems"):
+        return f"a list with {v[:3]} {s[v]} items"
+    if v == "minProperties":
+        return f"at least {s[v]} entries"
+    if v == "pattern":
+        return f"a name matching {s['pattern']}"
+    return error.message
+
+
+def _key(path) -> str:
+    return ".".join(str(p) for p in path) or "(top level)"
+
+
+def _raise_first(errors, source: str, prefix=()):
+    errors = sorted(errors, key=lambda e: (len(e.path), list(map(str, e.path))))
+    if not errors:
+        return
+    e = errors[0]
+    path = list(prefix) + list(e.absolute_path)
+    if e.validator == "additionalProperties":
+        extra = sorted(set(e.instance) - set(e.schema.get("properties", {})))
+        key = _key(path + [extra[0]]) if extra else _key(path)
+        raise ConfigError(f"{source}: unknown key '{key}'; allowed here: {_allowed(e)[14:]}")
+    if e.validator == "required":
+        missing = [k for k in e.validator_value if k not in e.instance]
+        raise ConfigError(f"{source}: missing key '{_key(path + missing[:1])}'")
+    if e.validator == "propertyNames":
+        raise ConfigError(f"{source}: bad name under '{_key(path)}': {e.message}")
+    raise ConfigError(f"{source}: {_key(path)} = {e.instance!r} is not allowed; use {_allowed(e)}")
+
+
+def deep_merge(base: dict, override: dict) -> dict:
+    """Recursively merge ``override`` into a copy of ``base``."""
+    out = copy.deepcopy(base)
+    for k, v in override.items():
+        if isinstance(v, dict) and isinstance(out.get(k), dict):
+            out[k] = deep_merge(out[k], v)
+        else:
+            out[k] = copy.deepcopy(v)
+    return out
+
+
+# -- cases ----------------------------------------------------------------------------------
+def contact_time(k_n: float, gamma_n: float, m_eff: float) -> float:
+    """Binary contact time of the linear spring-dashpot (science.md section 3):
+    ``t_c = pi / sqrt(k/m_eff - (gamma/(2 m_eff))^2)``; the undamped value if overdamped."""
+    w2 = k_n / m_eff - (gamma_n / (2 * m_eff)) ** 2
+    if w2 <= 0:
+        w2 = k_n / m_eff
+    return math.pi / math.sqrt(w2)
+
+
+def validate_case(case: dict, source: str = "case", prefix=()) -> dict:
+    """Validate a case (schema, then physical consistency); return it with defaults."""
+    case = copy.deepcopy(case)
+    _raise_first(_Validator(_load_schema("case.schema.yaml")).iter_errors(case), source, prefix)
+    _check_case(case, source, ".".join(map(str, prefix)) + "." if prefix else "")
+    return case
+
+
+def _check_case(case: dict, source: str, at: str):
+    p = case["particles"]
+    c = case["contact"]
+    pr = case["protocol"]
+    d = p["diameter"]
+    if d.get("distribution", "mono") == "mono" and d.get("sigma", 0):
+        raise ConfigError(f"{source}: {at}particles.diameter.sigma = {d['sigma']} needs "
+                          "distribution: lognormal (mono diameters have sigma 0)")
+    if pr["phi_init"] > PHI_INSERT_MAX:
+        raise ConfigError(
+            f"{source}: {at}protocol.phi_init = {pr['phi_init']} cannot be reached by random "
+            f"insertion; use a value <= {PHI_INSERT_MAX} and compress")
+    if pr["phi_final"] <= pr["phi_init"]:
+        raise ConfigError(f"{source}: {at}protocol.phi_final = {pr['phi_final']} must be above "
+                          f"phi_init = {pr['phi_init']}")
+    has_fast = "phi_fast" in pr
+    if has_fast != ("rate_fast" in pr):
+        raise ConfigError(f"{source}: {at}protocol: phi_fast and rate_fast go together; "
+                          "give both or neither")
+    if has_fast and not pr["phi_init"] < pr["phi_fast"] < pr["phi_final"]:
+        raise ConfigError(
+            f"{source}: {at}protocol.phi_fast = {pr['phi_fast']} must lie between phi_init = "
+            f"{pr['phi_init']} and phi_final = {pr['phi_final']}")
+    if c["friction"] > 0 and not c["k_t"] > 0:
+        raise ConfigError(f"{source}: {at}contact.k_t = {c['k_t']} must be > 0 when "
+                          f"friction = {c['friction']} > 0")
+    # time step against the contact time of the lightest pair
+    dmin = d["mean"] * (1 - 4 * d.get("sigma", 0)) if d.get("distribution") == "lognormal" else d["mean"]
+    dmin = max(dmin, 0.25 * d["mean"])
+    m = p["density"] * math.pi / 6 * dmin**3
+    t_c = contact_time(c["k_n"], c["gamma_n"], 0.5 * m)
+    if pr["dt"] > DT_MAX_FRACTION * t_c:
+        raise ConfigError(
+            f"{source}: {at}protocol.dt = {pr['dt']} is above {DT_MAX_FRACTION} of the contact "
+            f"time t_c = {t_c:.3g}; use dt <= {DT_MAX_FRACTION * t_c:.3g} (t_c/50 is usual)")
+    # the box at the end must hold the interaction range twice (minimum image)
+    vol = p["n"] * math.pi / 6 * d["mean"] ** 3 * (1 + 3 * d.get("sigma", 0) ** 2)
+    side = (vol / pr["phi_final"]) ** (1 / 3)
+    dmax = d["mean"] * (1 + 4 * d.get("sigma", 0))
+    if side < 3.0 * dmax:
+        n_min = math.ceil(p["n"] * (3.0 * dmax / side) ** 3)
+        raise ConfigError(
+            f"{source}: {at}particles.n = {p['n']} is too small for a periodic box at "
+            f"phi_final = {pr['phi_final']} (side {side:.3g} < 3 diameters); use n >= {n_min}")
+
+
+def load_case(path) -> dict:
+    """Read and validate one case file (YAML)."""
+    case = read_yaml(path)
+    if not isinstance(case, dict):
+        raise ConfigError(f"{path}: a case is a mapping of keys, got {type(case).__name__}")
+    return validate_case(case, str(path))
+
+
+def case_hash(case: dict) -> str:
+    """Short stable hash of a case (canonical JSON), recorded with every result."""
+    text = json.dumps(case, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+
+# -- configurations -----------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Run:
+    """One engine run: ``{results}/{study}/{variant}/seed{seed}/{engine}``."""
+
+    study: str
+    variant: str
+    seed: int
+    engine: str
+
+    @property
+    def case_dir(self) -> str:
+        return f"{self.study}/{self.variant}/seed{self.seed}"
+
+    @property
+    def run_dir(self) -> str:
+        return f"{self.case_dir}/{self.engine}"
+
+
+def engine_available(engine: str) -> bool:
+    """pysim and LAMMPS come with the Python environment; LIGGGHTS is a system binary."""
+    if engine == "liggghts":
+        return shutil.which("liggghts") is not None
+    return True
+
+
+def validate_config(config: dict, source: str = "config") -> dict:
+    """Validate a pipeline configuration and every case it expands to.
+
+    Returns the configuration with defaults filled and, under ``_cases``, the merged
+    and validated case of every ``(study, variant, seed)``.
+    """
+    if not isinstance(config, dict):
+        raise ConfigError(f"{source}: a configuration is a mapping of keys")
+    config = copy.deepcopy(config)
+    _raise_first(_Validator(_load_schema("config.schema.yaml")).iter_errors(config), source)
+    cases = {}
+    for name, study in config["studies"].items():
+        variants = study.get("variants") or {"base": {}}
+        if "seed" in study["case"]:
+            raise ConfigError(f"{source}: studies.{name}.case.seed is set per run from "
+                              f"studies.{name}.seeds; remove it")
+        for vname, override in variants.items():
+            merged = deep_merge(study["case"], override)
+            for seed in study["seeds"]:
+                merged["seed"] = seed
+                prefix = ("studies", name, "variants", vname) if "variants" in study else \
+                    ("studies", name, "case")
+                cases[(name, vname, seed)] = validate_case(merged, source, prefix)
+        for engine in study["engines"]:
+            if engine == "pysim":
+                for (s, v, _), c in cases.items():
+                    if s == name and c["contact"]["friction"] > 0:
+                        raise ConfigError(
+                            f"{source}: studies.{name} variant {v}: pysim does not implement "
+                            "friction yet; remove pysim from engines or set friction: 0")
+    config["_cases"] = cases
+    return config
+
+
+def load_config(path) -> dict:
+    return validate_config(read_yaml(path), str(path))
+
+
+def runs(config: dict, skipped: list | None = None) -> list[Run]:
+    """All runs of a validated configuration; engines that are not installed are left
+    out and reported in ``skipped`` (a list of one-line messages)."""
+    out = []
+    for (study, variant, seed), _ in config["_cases"].items():
+        for engine in config["studies"][study]["engines"]:
+            if not engine_available(engine):
+                if skipped is not None:
+                    msg = (f"{engine} is not installed: skipping its runs of study '{study}' "
+                           "(install it with 'make liggghts' as root, or "
+                           "'apt-get install liggghts')")
+                    if msg not in skipped:
+                        skipped.append(msg)
+                continue
+            out.append(Run(study, variant, seed, engine))
+    return out
+
+
+def varying_parameters(config: dict, study: str) -> dict[str, dict[str, object]]:
+    """Case parameters that differ between the variants of a study.
+
+    Returns ``{column name: {variant: value}}``; columns use the science symbols of
+    :data:`PARAMETER_NAMES` where one exists, else the last key.
+    """
+    flat = {}
+    for (s, v, _), case in config["_cases"].items():
+        if s == study:
+            flat[v] = _flatten({k: val for k, val in case.items() if k != "seed"})
+    keys = set().union(*[set(f) for f in flat.values()]) if flat else set()
+    out = {}
+    for key in sorted(keys):
+        values = {v: f.get(key) for v, f in flat.items()}
+        if len({json.dumps(x, sort_keys=True) for x in values.values()}) > 1:
+            out[PARAMETER_NAMES.get(key, key.split(".")[-1])] = values
+    return out
+
+
+def _flatten(d: dict, prefix: str = "") -> dict:
+    out = {}
+    for k, v in d.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, dict):
+            out.update(_flatten(v, key + "."))
+        else:
+            out[key] = v
+    return out

@@ -1,0 +1,252 @@
+"""Driving LAMMPS and LIGGGHTS with a rodpack case, and turning what they write into
+the common format (``docs/formats.md``).
+
+Each engine runs its deck from ``inputs/<engine>/`` with ``-var`` values derived from
+the case (:func:`deck_vars`) inside a work directory; its native contact output
+(``contacts.native``) is converted to ``contacts.dump`` using the particle positions
+of the same step, so that every engine's contact table has identical columns and
+conventions. A run that fails, hangs past its budget or loses atoms raises
+:class:`EngineError` naming the engine's own error line and its log.
+"""
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from pysim import io
+
+PROJECT_ROOT = Path(__file__).resolve().parents[1]
+DECKS = {
+    "lammps": PROJECT_ROOT / "inputs" / "lammps" / "in.spheres.compress",
+    "liggghts": PROJECT_ROOT / "inputs" / "liggghts" / "in.spheres.compress",
+}
+
+
+class EngineError(RuntimeError):
+    """An engine run failed; the message names the engine's error line and log file."""
+
+
+def deck_vars(case: dict, engine: str) -> dict[str, str]:
+    """``-var`` values of the sphere compression deck for a case."""
+    c, pr = case["contact"], case["protocol"]
+    out = case.get("output", {})
+    v = {
+        "k_n": c["k_n"], "gamma_n": c.get("gamma_n", 0.0), "mu": c.get("friction", 0.0),
+        "k_t": c.get("k_t", 0.0), "gamma_bg": c.get("gamma_bg", 0.0), "dt": pr["dt"],
+        "phi_init": pr["phi_init"], "rate": pr["rate"], "phi_final": pr["phi_final"],
+        "thermo_every": out.get("thermo_every", 1000), "dump_every": out.get("dump_every", 4000),
+    }
+    if "phi_fast" in pr:
+        v["phi_fast"], v["rate_fast"] = pr["phi_fast"], pr["rate_fast"]
+    else:  # no fast stage: a zero-length one
+        v["phi_fast"], v["rate_fast"] = pr["phi_init"], 1.0
+    if "pressure_final" in pr:
+        v["p_final"] = pr["pressure_final"]
+    if engine == "lammps":
+        v["x_gamma_t"] = 0.0
+    else:
+        v["gamma_t"] = 0.0
+    return {k: repr(float(x)) if isinstance(x, float) else str(x) for k, x in v.items()}
+
+
+def venv_bin(name: str) -> str:
+    """An executable of the Python environment running this code (``lmp``, ``mpiexec``)."""
+    path = Path(sys.executable).parent / name
+    if path.exists():
+        return str(path)
+    found = shutil.which(name)
+    if found is None:
+        raise EngineError(f"'{name}' not found next to {sys.executable} nor on PATH; "
+                          "run 'make setup'")
+    return found
+
+
+def command(engine: str, data: Path, outdir: Path, case: dict, ranks: int = 1) -> list[str]:
+    """The command line that runs the case's deck."""
+    args = []
+    for k, val in deck_vars(case, engine).items():
+        args += ["-var", k, val]
+    args += ["-var", "data", str(data), "-var", "outdir", str(outdir)]
+    if engine == "lammps":
+        exe = [venv_bin("lmp")]
+        if ranks > 1:
+            exe = [venv_bin("mpiexec"), "-n", str(ranks)] + exe
+        return exe + ["-in", str(DECKS["lammps"]), "-log", str(outdir / "log.lammps")] + args
+    if engine == "liggghts":
+        exe = shutil.which("liggghts")
+        if exe is None:
+            raise EngineError("liggghts is not installed (as root: apt-get install liggghts)")
+        pre = []
+        if ranks > 1:
+            pre = [shutil.which("mpirun") or "mpirun", "--allow-run-as-root", "-np", str(ranks)]
+        return pre + [exe, "-in", str(DECKS["liggghts"]), "-log", str(outdir / "log.liggghts")] + args
+    raise ValueError(f"unknown engine {engine!r}; valid: lammps, liggghts")
+
+
+def engine_version(engine: str, screen: str) -> str:
+    """Version line the engine printed first (``LAMMPS (22 Jul 2025 - Update 4)``)."""
+    pat = r"^(LAMMPS \(.*\))" if engine == "lammps" else r"^(LIGGGHTS \(.*?\))"
+    m = re.search(pat, screen, re.M)
+    return m.group(1) if m else "unknown"
+
+
+def _error_line(text: str) -> str | None:
+    for line in text.splitlines():
+        if line.startswith("ERROR"):
+            return line.strip()
+    return None
+
+
+def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
+        timeout: float = 3600.0) -> dict:
+    """Run one engine on a case and leave the common-format files in ``outdir``.
+
+    The engine works in ``outdir/work``; only complete, converted files are moved to
+    ``outdir``. Returns a summary for the provenance record.
+    """
+    outdir = Path(outdir)
+    work = outdir / "work"
+    if work.exists():
+        shutil.rmtree(work)
+    work.mkdir(parents=True)
+    cmd = command(engine, Path(data).resolve(), work.resolve(), case, ranks)
+    screen_path = work / "screen.txt"
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    t0 = time.perf_counter()
+    with open(screen_path, "w") as screen:
+        try:
+            proc = subprocess.run(cmd, stdout=screen, stderr=subprocess.STDOUT, timeout=timeout,
+                                  cwd=work, env=env)
+        except subprocess.TimeoutExpired:
+            raise EngineError(f"{engine} ran past its budget of {timeout:g} s; "
+                              f"log: {screen_path}") from None
+    wall = time.perf_counter() - t0
+    text = screen_path.read_text(errors="replace")
+    err = _error_line(text)
+    if proc.returncode != 0 or err:
+        raise EngineError(f"{engine} failed (exit {proc.returncode}): "
+                          f"{err or text.strip().splitlines()[-1] if text.strip() else 'no output'}; "
+                          f"log: {screen_path}")
+    if "Lost atoms" in text:
+        raise EngineError(f"{engine} lost atoms; log: {screen_path}")
+    particles = work / "particles.dump"
+    convert = convert_lammps_contacts if engine == "lammps" else convert_liggghts_contacts
+    stats = convert(work / "contacts.native", particles, work / "contacts.dump")
+    for name in ("particles.dump", "contacts.dump", "thermo.dat"):
+        os.replace(work / name, outdir / name)
+    steps = _last_step(outdir / "thermo.dat")
+    n = _count_atoms(outdir / "particles.dump")
+    return {"engine_version": engine_version(engine, text), "command": cmd, "ranks": ranks,
+            "wall_seconds": wall, "steps": steps,
+            "particle_steps_per_second": n * steps / wall if wall > 0 else float("nan"),
+            "contacts_dropped": stats["dropped"], "status": "ok"}
+
+
+def _last_step(thermo: Path) -> int:
+    last = 0
+    with open(thermo) as fh:
+        for line in fh:
+            if line.strip() and not line.startswith("#"):
+                last = int(float(line.split()[0]))
+    return last
+
+
+def _count_atoms(dump: Path) -> int:
+    with open(dump) as fh:
+        for line in fh:
+            if line.startswith("ITEM: NUMBER OF ATOMS"):
+                return int(next(fh))
+    return 0
+
+
+# -- contact tables -----------------------------------------------------------------------------
+def _iter_local(path: Path):
+    """Yield ``(step, box_lines, columns, table)`` of a LAMMPS-style local dump."""
+    with open(path) as fh:
+        lines = fh.read().splitlines()
+    k = 0
+    while k < len(lines):
+        if not lines[k].startswith("ITEM: TIMESTEP"):
+            k += 1
+            continue
+        step = int(lines[k + 1])
+        n = int(lines[k + 3])
+        box_lines = lines[k + 4:k + 8]
+        cols = lines[k + 8].split()[2:]
+        body = lines[k + 9:k + 9 + n]
+        table = np.array([r.split() for r in body], dtype=np.float64).reshape(n, len(cols))
+        yield step, box_lines, cols, table
+        k += 9 + n
+
+
+def _particle_frames(path: Path):
+    """``{step: (ids, x, radius, box_lo, box)}`` of a particle dump, for conversion."""
+    from analysis.io import read_particle_frames  # local import: analysis reads dumps
+
+    return {f.step: f for f in read_particle_frames(path)}
+
+
+def _geometry(frame, ids_i, ids_j):
+    """Normal, overlap and contact point of sphere pairs from a particle frame."""
+    index = {int(t): k for k, t in enumerate(frame.ids)}
+    a = np.array([index[int(t)] for t in ids_i], dtype=np.int64)
+    b = np.array([index[int(t)] for t in ids_j], dtype=np.int64)
+    d = frame.x[b] - frame.x[a]
+    d -= frame.box * np.floor(d / frame.box + 0.5) * frame.periodic
+    r = np.linalg.norm(d, axis=1)
+    n = d / np.where(r > 0, r, 1.0)[:, None]
+    delta = frame.radius[a] + frame.radius[b] - r
+    point = frame.x[a] + (frame.radius[a] - 0.5 * delta)[:, None] * n
+    return n, delta, point
+
+
+def _write_converted(native: Path, particles: Path, out: Path, columns_of):
+    frames = _particle_frames(particles)
+    dropped = 0
+    with open(io.part_path(out), "w") as fh:
+        for step, _box, cols, table in _iter_local(native):
+            if step not in frames:
+                raise EngineError(f"{native}: contact frame at step {step} has no particle "
+                                  f"frame in {particles}")
+            fr = frames[step]
+            ids_i, ids_j, force = columns_of(cols, table)
+            n, delta, point = _geometry(fr, ids_i, ids_j)
+            keep = delta > 0
+            dropped += int(np.count_nonzero(~keep))
+            rec = np.column_stack([point, n, delta, force])[keep]
+            ij = np.column_stack([ids_i, ids_j]).astype(np.int64)[keep]
+            io.write_contacts_frame(fh, step, fr.box, fr.periodic, ij, rec, box_lo=fr.box_lo)
+    io.finalize(out)
+    return {"dropped": dropped}
+
+
+def convert_lammps_contacts(native: Path, particles: Path, out: Path) -> dict:
+    """LAMMPS ``patom1 patom2 dist fx fy fz p1 p2 p3 p10 p11 p12`` -> common table.
+
+    The force on i is the normal part ``(fx, fy, fz)`` plus the tangential part
+    ``(p1, p2, p3)`` of pair granular (its documented single() extras).
+    """
+    def columns_of(cols, t):
+        return t[:, 0], t[:, 1], t[:, 3:6] + t[:, 6:9]
+
+    return _write_converted(native, particles, out, columns_of)
+
+
+def convert_liggghts_contacts(native: Path, particles: Path, out: Path) -> dict:
+    """LIGGGHTS ``pos(6) id_i id_j periodic force(3) delta`` -> common table.
+
+    ``force`` is the total contact force on i. Contact points are recomputed from the
+    particle frame because LIGGGHTS' own ``contactPoint`` is wrong across periodic
+    boundaries.
+    """
+    def columns_of(cols, t):
+        return t[:, 6], t[:, 7], t[:, 9:12]
+
+    return _write_converted(native, particles, out, columns_of)
