@@ -13,21 +13,7 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
-
-
-def _init(case, out):
-    from pysim import io
-    from pysim.initial import random_spheres, sample_diameters
-
-    p = case["particles"]
-    rng = np.random.default_rng(case["seed"])
-    d = sample_diameters(p["n"], p["diameter"].get("distribution", "mono"),
-                         p["diameter"]["mean"], p["diameter"].get("sigma", 0.0), rng)
-    x, d, box = random_spheres(d, case["protocol"]["phi_init"], case["seed"])
-    io.write_sphere_data(out, x, d, box, p["density"],
-                         title=f"rodpack random start, seed {case['seed']}, "
-                               f"phi {case['protocol']['phi_init']}")
+from pysim.initial import write_initial
 
 
 def main(argv=None) -> int:
@@ -47,7 +33,7 @@ def main(argv=None) -> int:
     try:
         case = load_case(args.case)
         if args.command == "init":
-            _init(case, args.out)
+            write_initial(case, args.out)
             return 0
         return _run(case, args)
     except ConfigError as exc:
@@ -66,7 +52,7 @@ def _run(case, args) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     if args.data is None:
         args.data = Path(tempfile.mkdtemp()) / "init.data"
-        _init(case, args.data)
+        write_initial(case, args.data)
     ids, x, d, _density, lo, box = io.read_sphere_data(args.data)
     summary = compress.run(case, x - lo, d, box, args.out, ids=ids,
                            progress=not args.no_progress)

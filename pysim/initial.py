@@ -119,3 +119,22 @@ def random_spheres(diameters: np.ndarray, phi: float, seed: int, max_attempts: i
             f"random insertion placed only {placed} of {len(diameters)} spheres at "
             f"phi = {phi}; lower phi_init")
     return x, diameters, box
+
+
+def write_initial(case: dict, path) -> None:
+    """Write the random non-overlapping start of a case as a LAMMPS data file.
+
+    Diameters are drawn with ``numpy.random.default_rng(seed)``, positions by RSA
+    seeded with the same ``seed``, at ``protocol.phi_init``.
+    """
+    from pysim.io import write_sphere_data
+
+    p = case["particles"]
+    seed = int(case["seed"])
+    rng = np.random.default_rng(seed)
+    d = sample_diameters(p["n"], p["diameter"].get("distribution", "mono"),
+                         p["diameter"]["mean"], p["diameter"].get("sigma", 0.0), rng)
+    phi = case["protocol"]["phi_init"]
+    x, d, box = random_spheres(d, phi, seed)
+    write_sphere_data(path, x, d, box, p.get("density", 1.0),
+                      title=f"rodpack random start, seed {seed}, phi {phi}")

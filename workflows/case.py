@@ -43,14 +43,24 @@ class _Loader(yaml.SafeLoader):
     read ``1.0e5`` as a string)."""
 
 
-_Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
+_FLOAT_RE = re.compile(r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
                   |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
                   |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
                   |[-+]?\.(?:inf|Inf|INF)
-                  |\.(?:nan|NaN|NAN))$""", re.X),
-    list("-+0123456789."))
+                  |\.(?:nan|NaN|NAN))$""", re.X)
+_Loader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT_RE, list("-+0123456789."))
+
+
+def coerce_numbers(obj):
+    """Turn strings that YAML 1.1 left unparsed but that are numbers (``"1.0e5"``, as
+    Snakemake's own loader leaves them) into floats, recursively."""
+    if isinstance(obj, dict):
+        return {k: coerce_numbers(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [coerce_numbers(v) for v in obj]
+    if isinstance(obj, str) and _FLOAT_RE.match(obj.strip()) and obj.strip()[:1] != ".":
+        return float(obj)
+    return obj
 
 
 def read_yaml(path):
@@ -167,7 +177,7 @@ def contact_time(k_n: float, gamma_n: float, m_eff: float) -> float:
 
 def validate_case(case: dict, source: str = "case", prefix=()) -> dict:
     """Validate a case (schema, then physical consistency); return it with defaults."""
-    case = copy.deepcopy(case)
+    case = coerce_numbers(copy.deepcopy(case))
     _raise_first(_Validator(_load_schema("case.schema.yaml")).iter_errors(case), source, prefix)
     _check_case(case, source, ".".join(map(str, prefix)) + "." if prefix else "")
     return case
@@ -267,7 +277,7 @@ def validate_config(config: dict, source: str = "config") -> dict:
     """
     if not isinstance(config, dict):
         raise ConfigError(f"{source}: a configuration is a mapping of keys")
-    config = copy.deepcopy(config)
+    config = coerce_numbers(copy.deepcopy(config))
     _raise_first(_Validator(_load_schema("config.schema.yaml")).iter_errors(config), source)
     cases = {}
     for name, study in config["studies"].items():

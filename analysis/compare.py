@@ -1,0 +1,57 @@
+"""Engine-versus-engine comparison tables with verdicts.
+
+For every ``(study, case, observable)``: the mean, standard deviation and number of
+seeds per engine, and for every engine the difference of its mean from the
+other engines' with a verdict: ``agree`` when ``|difference| <= tolerance``,
+``DIFFER`` otherwise, ``n/a`` when either side is missing. Tolerances are absolute,
+per observable (:data:`TOLERANCES`); observables without one get no verdict.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+#: absolute tolerance of the engine agreement, per observable
+TOLERANCES = {"phi_j": 0.01, "z_j": 0.3, "phi_at_z_j": 0.01}
+
+
+def per_engine(summary: pd.DataFrame) -> pd.DataFrame:
+    """Mean, standard deviation and count over seeds per study, case, observable, engine."""
+    g = summary.groupby(["study", "case", "observable", "engine"], sort=True)["value"]
+    out = g.agg(mean="mean", std="std", n="count").reset_index()
+    return out
+
+
+ENGINE_ORDER = ("pysim", "lammps", "liggghts")
+
+
+def _order(engine: str) -> tuple:
+    return (ENGINE_ORDER.index(engine) if engine in ENGINE_ORDER else len(ENGINE_ORDER), engine)
+
+
+def compare(summary: pd.DataFrame, tolerances: dict | None = None) -> pd.DataFrame:
+    """Every pair of engines, per study, case and observable with a tolerance: the
+    difference of their seed means and a verdict (see the module docstring). The first
+    engine of a pair comes first in :data:`ENGINE_ORDER` (pysim is the reference)."""
+    tol = TOLERANCES if tolerances is None else tolerances
+    stats = per_engine(summary)
+    rows = []
+    for (study, case, obs), grp in stats.groupby(["study", "case", "observable"], sort=True):
+        if obs not in tol:
+            continue
+        recs = sorted((r for _, r in grp.iterrows()), key=lambda r: _order(r.engine))
+        for a in range(len(recs)):
+            for b in range(a + 1, len(recs)):
+                ra, rb = recs[a], recs[b]
+                if np.isfinite(ra["mean"]) and np.isfinite(rb["mean"]):
+                    diff = float(rb["mean"] - ra["mean"])
+                    verdict = "agree" if abs(diff) <= tol[obs] else "DIFFER"
+                else:
+                    diff, verdict = np.nan, "n/a"
+                rows.append({"study": study, "case": case, "observable": obs,
+                             "engine_a": ra.engine, "mean_a": ra["mean"], "std_a": ra["std"],
+                             "engine_b": rb.engine, "mean_b": rb["mean"], "std_b": rb["std"],
+                             "difference": diff, "tolerance": tol[obs], "verdict": verdict})
+    return pd.DataFrame(rows, columns=["study", "case", "observable", "engine_a", "mean_a",
+                                       "std_a", "engine_b", "mean_b", "std_b", "difference",
+                                       "tolerance", "verdict"])

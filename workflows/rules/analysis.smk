@@ -1,0 +1,53 @@
+# The same analysis for every engine: per-run observables, then the joined tables.
+
+
+def _window(wc):
+    return CFG["studies"][wc.study].get("analysis", {}).get("jamming_window", [1e-3, 1e-2])
+
+
+def _parameters(wc):
+    return json.dumps({k: v[wc.variant] for k, v in varying_parameters(CFG, wc.study).items()})
+
+
+rule analyse_run:
+    input:
+        case=f"{RUN}/case.yaml",
+        files=[f"{RUN}/{{engine}}/{name}" for name in COMMON],
+    output:
+        observables=f"{RUN}/{{engine}}/observables.csv",
+        curves=f"{RUN}/{{engine}}/curves.csv",
+    log:
+        f"{RUN}/{{engine}}/analysis.log",
+    params:
+        run=f"{RUN}/{{engine}}",
+        window=lambda wc: " ".join(map(str, _window(wc))),
+        parameters=_parameters,
+    wildcard_constraints:
+        engine="pysim|lammps|liggghts",
+    shell:
+        "{PYTHON} -m workflows.scripts.analyse_run --case {input.case} --run {params.run}"
+        " --study {wildcards.study} --variant {wildcards.variant} --seed {wildcards.seed}"
+        " --engine {wildcards.engine} --window {params.window}"
+        " --parameters '{params.parameters}'"
+        " --observables {output.observables} --curves {output.curves} 2> {log}"
+
+
+rule summary:
+    input:
+        [f"{d}/observables.csv" for d in run_dirs()],
+    output:
+        summary=report(
+            f"{RESULTS}/summary.csv",
+            caption="../report/summary.rst",
+            category="Tables",
+        ),
+        comparison=report(
+            f"{RESULTS}/comparison.csv",
+            caption="../report/comparison.rst",
+            category="Tables",
+        ),
+    log:
+        f"{RESULTS}/summary.log",
+    shell:
+        "{PYTHON} -m workflows.scripts.summarize --summary {output.summary}"
+        " --comparison {output.comparison} {input} 2> {log}"

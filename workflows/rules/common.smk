@@ -1,0 +1,57 @@
+# Configuration validation, the run table and the final targets.
+import json
+import sys
+
+from workflows.case import ConfigError, runs as expand_runs, validate_config, varying_parameters
+
+PYTHON = sys.executable
+_CONFIG_SOURCE = ", ".join(map(str, workflow.configfiles)) or "config"
+
+try:
+    CFG = validate_config(config, source=_CONFIG_SOURCE)
+except ConfigError as exc:
+    sys.stderr.write(f"error: {exc}\n")
+    sys.exit(2)
+
+RESULTS = CFG["results"]
+_skipped = []
+RUNS = expand_runs(CFG, _skipped)
+for _msg in _skipped:
+    sys.stderr.write(f"rodpack: {_msg}\n")
+
+
+wildcard_constraints:
+    study="[a-z][a-z0-9_]*",
+    variant="[a-z0-9][a-z0-9_.-]*",
+    seed="[0-9]+",
+
+
+def case_of(wildcards):
+    """The validated case of a (study, variant, seed)."""
+    return CFG["_cases"][(wildcards.study, wildcards.variant, int(wildcards.seed))]
+
+
+def engine_setting(engine, key, default):
+    return CFG.get("engines", {}).get(engine, {}).get(key, default)
+
+
+def run_dirs(study=None, variant=None):
+    return [
+        f"{RESULTS}/{r.run_dir}"
+        for r in RUNS
+        if (study is None or r.study == study) and (variant is None or r.variant == variant)
+    ]
+
+
+def study_variants():
+    return sorted({(r.study, r.variant) for r in RUNS})
+
+
+def get_final_output():
+    out = [f"{RESULTS}/summary.csv", f"{RESULTS}/comparison.csv"]
+    for study, variant in study_variants():
+        out += expand(
+            f"{RESULTS}/{study}/figures/{variant}.{{kind}}.png",
+            kind=["pressure", "contacts", "phi_j"],
+        )
+    return out

@@ -1,0 +1,50 @@
+# Figures with all engines overlaid, registered for 'snakemake --report'.
+
+
+def _study_run_dirs(wc):
+    return run_dirs(wc.study, wc.variant)
+
+
+def _p_scale(wc):
+    case = CFG["_cases"][
+        next(k for k in CFG["_cases"] if k[0] == wc.study and k[1] == wc.variant)
+    ]
+    return case["contact"]["k_n"] / case["particles"]["diameter"]["mean"]
+
+
+rule plot_study:
+    input:
+        lambda wc: [
+            f"{d}/{name}"
+            for d in _study_run_dirs(wc)
+            for name in ("observables.csv", "curves.csv", "thermo.dat")
+        ],
+    output:
+        pressure=report(
+            f"{RESULTS}/{{study}}/figures/{{variant}}.pressure.png",
+            caption="../report/pressure.rst",
+            category="{study}",
+            subcategory="{variant}",
+        ),
+        contacts=report(
+            f"{RESULTS}/{{study}}/figures/{{variant}}.contacts.png",
+            caption="../report/contacts.rst",
+            category="{study}",
+            subcategory="{variant}",
+        ),
+        phi_j=report(
+            f"{RESULTS}/{{study}}/figures/{{variant}}.phi_j.png",
+            caption="../report/phi_j.rst",
+            category="{study}",
+            subcategory="{variant}",
+        ),
+    log:
+        f"{RESULTS}/{{study}}/figures/{{variant}}.log",
+    params:
+        dirs=lambda wc: " ".join(_study_run_dirs(wc)),
+        p_scale=_p_scale,
+        window=lambda wc: " ".join(map(str, _window(wc))),
+    shell:
+        "{PYTHON} -m workflows.scripts.plot_study --pressure {output.pressure}"
+        " --contacts {output.contacts} --phi-j {output.phi_j} --p-scale {params.p_scale}"
+        " --window {params.window} {params.dirs} 2> {log}"

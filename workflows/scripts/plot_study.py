@@ -1,0 +1,51 @@
+"""Figures of one study variant with all engines overlaid: pressure and contact number
+versus packing fraction, and phi_J per engine."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import pandas as pd
+
+from analysis import plots
+from analysis.compare import per_engine
+from analysis.io import read_thermo
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--pressure", required=True, type=Path)
+    ap.add_argument("--contacts", required=True, type=Path)
+    ap.add_argument("--phi-j", required=True, type=Path)
+    ap.add_argument("--p-scale", type=float, default=1.0)
+    ap.add_argument("--window", type=float, nargs=2)
+    ap.add_argument("--z-iso", type=float, default=6.0)
+    ap.add_argument("run_dirs", nargs="+", type=Path,
+                    help="run directories holding thermo.dat, curves.csv, observables.csv")
+    a = ap.parse_args(argv)
+    runs, obs = [], []
+    seeds = {}
+    for d in a.run_dirs:
+        o = pd.read_csv(d / "observables.csv")
+        obs.append(o)
+        val = dict(zip(o.observable, o.value))
+        engine, seed = o.engine.iloc[0], int(o.seed.iloc[0])
+        seeds.setdefault(engine, [])
+        seeds[engine].append(seed)
+        runs.append({"engine": engine, "seed": seed, "thermo": read_thermo(d / "thermo.dat"),
+                     "curves": pd.read_csv(d / "curves.csv"), "phi_j": val.get("phi_j"),
+                     "slope": val.get("jamming_slope")})
+    for r in runs:
+        r["seed_index"] = sorted(seeds[r["engine"]]).index(r["seed"])
+    phis = [r["phi_j"] for r in runs if pd.notna(r["phi_j"])]
+    phi_min = min(phis) - 0.06 if phis else None
+    plots.pressure_vs_phi(runs, a.pressure, p_scale=a.p_scale, window=a.window, phi_min=phi_min)
+    plots.contacts_vs_phi(runs, a.contacts, z_iso=a.z_iso, phi_min=phi_min)
+    stats = per_engine(pd.concat(obs, ignore_index=True))
+    plots.observable_by_engine(stats, "phi_j", a.phi_j, ylabel=r"$\phi_J$ (mean $\pm$ sd over seeds)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
