@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 
 #: absolute tolerance of the engine agreement, per observable
-TOLERANCES = {"phi_j": 0.01, "z_j": 0.3, "phi_at_z_j": 0.01}
+TOLERANCES = {"phi_j": 0.01, "z_j": 0.3}
 
 
 def per_engine(summary: pd.DataFrame) -> pd.DataFrame:

@@ -64,3 +64,64 @@ class ContactNumber(Observable):
                   n_rattlers=int(ratt.sum()), z_rattler_free=z_rf,
                   distribution=np.bincount(c) / n if n else np.zeros(1))
         return self
+
+
+def geometric_contacts(frame: Frame, tolerance: float = 0.0) -> Contacts:
+    """Contacts of spheres from positions alone: pairs with centre distance below
+    ``R_i + R_j + tolerance`` (minimum image on periodic axes). Forces are unknown
+    (zero); overlaps may be negative down to ``-tolerance``. Uses scipy's cKDTree.
+
+    Spherocylinders (``length > 0``) need the segment geometry of issue 4 and are
+    refused here.
+    """
+    if np.any(frame.length > 0):
+        raise NotImplementedError("geometric contacts of spherocylinders are not implemented yet")
+    rmax = float(frame.radius.max())
+    a, b = _pairs_within(frame, 2.0 * rmax + tolerance)
+    d = frame.x[b] - frame.x[a]
+    d -= frame.box * np.floor(d / frame.box + 0.5) * frame.periodic
+    r = np.linalg.norm(d, axis=1)
+    overlap = frame.radius[a] + frame.radius[b] - r
+    keep = overlap > -tolerance
+    a, b, d, r, overlap = a[keep], b[keep], d[keep], r[keep], overlap[keep]
+    order = np.lexsort((b, a))
+    a, b, d, r, overlap = a[order], b[order], d[order], r[order], overlap[order]
+    n = d / r[:, None]
+    point = frame.x[a] + (frame.radius[a] - 0.5 * overlap)[:, None] * n
+    return Contacts(step=frame.step, i=frame.ids[a], j=frame.ids[b], point=point, normal=n,
+                    overlap=overlap, force=np.zeros_like(n))
+
+
+def _pairs_within(frame: Frame, cutoff: float):
+    """Index pairs ``a < b`` closer than ``cutoff`` (minimum image on periodic axes).
+
+    cKDTree handles all-periodic boxes natively; with some walls, ghost copies of the
+    particles within ``cutoff`` of a periodic face are added instead.
+    """
+    from scipy.spatial import cKDTree
+
+    x = frame.x - frame.box_lo
+    if np.all(frame.periodic):
+        x = np.mod(x, frame.box)
+        x[x >= frame.box] = 0.0  # mod may round up to the box length
+        pairs = cKDTree(x, boxsize=frame.box).query_pairs(cutoff, output_type="ndarray")
+        return pairs[:, 0], pairs[:, 1]
+    x = np.where(frame.periodic, np.mod(x, frame.box), x)
+    pts, owner = [x], [np.arange(frame.n)]
+    for axis in np.flatnonzero(frame.periodic):
+        cur = np.concatenate(pts)
+        own = np.concatenate(owner)
+        for sign in (-1.0, 1.0):
+            near = cur[:, axis] < cutoff if sign > 0 else cur[:, axis] > frame.box[axis] - cutoff
+            shifted = cur[near].copy()
+            shifted[:, axis] += sign * frame.box[axis]
+            pts.append(shifted)
+            owner.append(own[near])
+    allx = np.concatenate(pts)
+    own = np.concatenate(owner)
+    pairs = cKDTree(allx).query_pairs(cutoff, output_type="ndarray")
+    a, b = own[pairs[:, 0]], own[pairs[:, 1]]
+    keep = a != b
+    lo, hi = np.minimum(a[keep], b[keep]), np.maximum(a[keep], b[keep])
+    uniq = np.unique(np.column_stack([lo, hi]), axis=0)
+    return uniq[:, 0], uniq[:, 1]

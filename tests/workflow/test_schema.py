@@ -1,0 +1,102 @@
+"""Bad cases and configurations give one-line errors naming key, value and what is
+allowed, exit status 2, and write nothing."""
+import copy
+import subprocess
+import sys
+
+import pytest
+import yaml
+
+from workflows.case import ConfigError, load_config, validate_case, validate_config
+
+GOOD_CASE = {
+    "particles": {"n": 500, "diameter": {"distribution": "mono", "mean": 1.0}},
+    "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 100.0, "gamma_bg": 1.0},
+    "protocol": {"name": "compress", "phi_init": 0.3, "rate": 0.005, "phi_final": 0.7, "dt": 1e-4},
+    "seed": 1,
+}
+
+
+def with_value(path, value):
+    case = copy.deepcopy(GOOD_CASE)
+    d = case
+    for k in path[:-1]:
+        d = d[k]
+    if value is KeyError:
+        del d[path[-1]]
+    else:
+        d[path[-1]] = value
+    return case
+
+
+def test_good_case_gets_defaults():
+    case = validate_case(GOOD_CASE)
+    assert case["contact"]["friction"] == 0.0
+    assert case["output"] == {"thermo_every": 1000, "dump_every": 4000}
+
+
+@pytest.mark.parametrize("path, value, message", [
+    (("particles", "n"), -5, r"particles\.n = -5 is not allowed; use a number >= 2"),
+    (("particles", "diameter", "mean"), 0, r"particles\.diameter\.mean = 0 .*> 0"),
+    (("contact", "law"), "hook", r"contact\.law = 'hook' is not allowed; use one of 'hooke'"),
+    (("protocol", "name"), "shake", r"protocol\.name = 'shake'.*one of 'compress'"),
+    (("protocol", "phi_final"), 1.2, r"protocol\.phi_final = 1\.2 .*< 1"),
+    (("protocol", "phi_init"), 0.5, r"phi_init = 0\.5 cannot be reached by random insertion"),
+    (("protocol", "dt"), 1e-2, r"protocol\.dt = 0\.01 is above 0\.1 of the contact time"),
+    (("particles", "n"), "many", r"particles\.n = 'many' .*type integer"),
+    (("particles", "n"), 10, r"particles\.n = 10 is too small for a periodic box"),
+    (("contact", "k_n"), KeyError, r"missing key 'contact\.k_n'"),
+    (("contact", "friction"), 0.5, r"contact\.k_t = 0\.0 must be > 0 when friction"),
+])
+def test_bad_case_values(path, value, message):
+    with pytest.raises(ConfigError, match=message) as exc:
+        validate_case(with_value(path, value), "case.yaml")
+    assert "\n" not in str(exc.value)
+    assert str(exc.value).startswith("case.yaml: ")
+
+
+def test_unknown_key_is_a_typo():
+    case = copy.deepcopy(GOOD_CASE)
+    case["protocol"]["phi_fnial"] = 0.7
+    with pytest.raises(ConfigError, match=r"unknown key 'protocol\.phi_fnial'; allowed here: dt, name"):
+        validate_case(case, "case.yaml")
+
+
+def config_with(**study_changes):
+    study = {"engines": ["pysim", "lammps"], "seeds": [1], "case": copy.deepcopy(GOOD_CASE)}
+    del study["case"]["seed"]
+    study.update(study_changes)
+    return {"studies": {"s": study}}
+
+
+def test_config_errors():
+    with pytest.raises(ConfigError, match=r"studies\.s\.engines\.0 = 'gromacs'"):
+        validate_config(config_with(engines=["gromacs"]), "cfg.yaml")
+    with pytest.raises(ConfigError, match=r"studies\.s\.seeds = \[\] .*1 items"):
+        validate_config(config_with(seeds=[]), "cfg.yaml")
+    with pytest.raises(ConfigError, match=r"studies = \{\} .*at least 1 entries"):
+        validate_config({"studies": {}}, "cfg.yaml")
+    bad_variant = config_with(variants={"fast": {"protocol": {"rate": -1}}})
+    with pytest.raises(ConfigError, match=r"studies\.s\.variants\.fast\.protocol\.rate = -1"):
+        validate_config(bad_variant, "cfg.yaml")
+
+
+def test_yaml_exponents_without_sign_are_numbers(tmp_path):
+    p = tmp_path / "cfg.yaml"
+    p.write_text(yaml.safe_dump(config_with()).replace("100000.0", "1.0e5"))
+    cfg = load_config(p)
+    assert cfg["_cases"][("s", "base", 1)]["contact"]["k_n"] == 1e5
+
+
+def test_cli_bad_case_exit_2_no_traceback_no_output(tmp_path):
+    case = with_value(("protocol", "phi_final"), 1.5)
+    p = tmp_path / "case.yaml"
+    p.write_text(yaml.safe_dump(case))
+    out = tmp_path / "out"
+    r = subprocess.run([sys.executable, "-m", "pysim", "run", str(p), "--out", str(out)],
+                       capture_output=True, text=True)
+    assert r.returncode == 2
+    assert "Traceback" not in r.stderr
+    assert r.stderr.strip().count("\n") == 0
+    assert "protocol.phi_final = 1.5" in r.stderr
+    assert not out.exists()
