@@ -6,7 +6,7 @@ from analysis.frame import Contacts, Frame
 from analysis.stress import particle_stress, pressure, stress_tensor
 from pysim import State
 from pysim.initial import random_spheres
-from pysim.simulation import ContactLaw, Simulation
+from pysim.simulation import ContactModel, Simulation
 
 
 def test_two_spheres_pressed_together():
@@ -29,7 +29,7 @@ def test_two_spheres_pressed_together():
 def test_stress_from_contact_table_equals_engine_virial():
     x, d, box = random_spheres(np.ones(300), 0.3, seed=2)
     st = State.spheres(x, d / 2, box)
-    sim = Simulation(st, ContactLaw("hooke", 1e5, 50.0), dt=1e-4, gamma_bg=1.0)
+    sim = Simulation(st, ContactModel("hooke", 1e5, 50.0, gamma_bg=1.0), dt=1e-4)
     sim.run(30_000, strain_rate=-0.1)
     ij, rec = sim.contact_table()
     ids = np.arange(1, st.n + 1)
