@@ -1,10 +1,27 @@
-"""Contact numbers and rattlers.
+"""Contacts: from tables or geometry, contact numbers, rattlers, contact types.
 
 ``C_i`` is the number of contacts of particle ``i``; the mean contact number is
-``<C> = 2 N_c / N``. Rattlers (3-D frictionless spheres: fewer than ``d + 1 = 4``
-contacts) carry no load; they are removed iteratively, because removing one can
-leave a neighbour under the threshold, and ``z`` is then counted on the remaining
-backbone: ``z = 2 N_c' / N'``.
+``<C> = 2 N_c / N``. Rattlers carry no load; they are removed iteratively, because
+removing one can leave a neighbour under the threshold, and the contact number is then
+counted on the remaining backbone, ``z = 2 N_c' / N'``. Rules (science.md sections 4, 5):
+
+* ``rule="threshold"``: fewer than ``c_min`` contacts (3-D frictionless spheres
+  ``c_min = d + 1 = 4``; for 3-D rods, for which science.md gives no rule, we use
+  ``d_f + 1 = 6``: see :func:`default_c_min`);
+* ``rule="2d"``: 0 or 1 contacts, or 2 contacts unless they lie on opposite flat sides
+  of the rod (disks have no flat side, so they need 3).
+
+Contact *types* classify each end of a contact as a **tip** (the closest point of the
+spine is one of its ends, the contact point projects at or beyond ``|t| = L/2``) or a
+**side**: tip-tip, tip-side, side-side (spheres are all tip).
+
+2-D counting: two parallel spines in side-to-side contact constrain two degrees of
+freedom; for isostaticity such a contact counts as two bonds (``z_bonds``, the ``z`` of
+science.md) while contact-geometry statistics count it once (``z_tilde``).
+
+Wall contacts (rows whose ``j`` is not a particle id, :mod:`analysis.walls`) count for
+their grain and never become rattlers. Glued-sphere rods: :func:`glued_bodies` and
+:func:`merge_glued_contacts` turn sphere-sphere contacts into body-body contacts.
 """
 from __future__ import annotations
 
@@ -12,6 +29,10 @@ import numpy as np
 
 from analysis.base import Observable
 from analysis.frame import Contacts, Frame
+from analysis.walls import split_wall_contacts
+
+TIP_TIP, TIP_SIDE, SIDE_SIDE = 0, 1, 2
+TYPE_NAMES = ("tip-tip", "tip-side", "side-side")
 
 
 def contact_counts(n: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
@@ -19,15 +40,18 @@ def contact_counts(n: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
     return (np.bincount(i, minlength=n) + np.bincount(j, minlength=n)).astype(np.int64)
 
 
-def remove_rattlers(n: int, i: np.ndarray, j: np.ndarray, c_min: int) -> np.ndarray:
+def remove_rattlers(n: int, i: np.ndarray, j: np.ndarray, c_min: int,
+                    fixed: np.ndarray | None = None) -> np.ndarray:
     """Boolean mask (n,) of rattlers: particles left with fewer than ``c_min`` contacts
-    after iteratively removing such particles and their contacts."""
+    after iteratively removing such particles and their contacts. ``fixed`` (n,) adds
+    contacts that never disappear (walls)."""
     i = np.asarray(i, dtype=np.int64)
     j = np.asarray(j, dtype=np.int64)
+    extra = np.zeros(n, np.int64) if fixed is None else np.asarray(fixed, np.int64)
     rattler = np.zeros(n, dtype=bool)
     alive = np.ones(len(i), dtype=bool)
     while True:
-        c = contact_counts(n, i[alive], j[alive])
+        c = contact_counts(n, i[alive], j[alive]) + extra
         new = (c < c_min) & ~rattler
         if not new.any():
             return rattler
@@ -35,65 +59,232 @@ def remove_rattlers(n: int, i: np.ndarray, j: np.ndarray, c_min: int) -> np.ndar
         alive &= ~(rattler[i] | rattler[j])
 
 
+def default_c_min(frame: Frame) -> int:
+    """Threshold rule's ``c_min`` for a frame: ``d_f + 1`` with ``d_f`` the blocked degrees
+    of freedom of one particle (3-D spheres 3 -> 4, 3-D rods 5 -> 6; 2-D disks 2 -> 3,
+    2-D rods 3 -> 4; for 2-D prefer ``rule="2d"``)."""
+    rods = bool(np.any(frame.length > 0))
+    d_f = {(3, False): 3, (3, True): 5, (2, False): 2, (2, True): 3}[(frame.dim, rods)]
+    return d_f + 1
+
+
+def _side_offsets(frame: Frame, rows: np.ndarray, point: np.ndarray):
+    """Axial ``t`` and signed perpendicular (2-D) offsets of contact points from centres."""
+    rel = frame.minimum_image(point - frame.x[rows])
+    t = np.sum(rel * frame.axis[rows], axis=1)
+    perp = np.column_stack([-frame.axis[rows, 1], frame.axis[rows, 0], np.zeros(len(rows))])
+    return t, np.sum(rel * perp, axis=1)
+
+
+def is_tip(frame: Frame, rows: np.ndarray, point: np.ndarray, tol: float = 1e-6) -> np.ndarray:
+    """Whether the contact at ``point`` sits on a cap of particle ``rows``:
+    ``|(p - x) . u| >= L/2 - tol R`` (always true for spheres)."""
+    t, _ = _side_offsets(frame, rows, point)
+    return np.abs(t) >= 0.5 * frame.length[rows] - tol * frame.radius[rows]
+
+
+def contact_types(frame: Frame, contacts: Contacts, tol: float = 1e-6) -> np.ndarray:
+    """Type code per contact (C,): :data:`TIP_TIP`, :data:`TIP_SIDE`, :data:`SIDE_SIDE`
+    (particle-particle contacts only; see :func:`is_tip` for ``tol``)."""
+    a = frame.index_of(contacts.i)
+    b = frame.index_of(contacts.j)
+    side = (~is_tip(frame, a, contacts.point, tol)).astype(int) + \
+        (~is_tip(frame, b, contacts.point, tol)).astype(int)
+    return side  # 0 tips -> tip-tip, 1 side -> tip-side, 2 sides -> side-side
+
+
+def parallel_side_contacts(frame: Frame, contacts: Contacts, angle_tol: float = 1e-6,
+                           tol: float = 1e-6) -> np.ndarray:
+    """Side-side contacts of parallel spines (|u_i x u_j| < sin(angle_tol)), (C,) bool."""
+    a = frame.index_of(contacts.i)
+    b = frame.index_of(contacts.j)
+    cross = np.linalg.norm(np.cross(frame.axis[a], frame.axis[b]), axis=1)
+    rods = (frame.length[a] > 0) & (frame.length[b] > 0)
+    return rods & (cross < np.sin(angle_tol)) & (contact_types(frame, contacts, tol) == SIDE_SIDE)
+
+
+def remove_rattlers_2d(frame: Frame, contacts: Contacts, tol: float = 1e-6) -> np.ndarray:
+    """Rattler mask (N,) by the 2-D rule: 0 or 1 contacts, or 2 contacts unless both sit
+    on the flat sides (not the caps) and on opposite sides of the spine; iterated. Wall
+    rows (``j`` not a particle) count and are never removed."""
+    pp, walls = split_wall_contacts(frame, contacts)
+    n = frame.n
+    a = frame.index_of(pp.i)
+    b = frame.index_of(pp.j)
+    w = frame.index_of(walls.i)
+    # every contact end: owner row, partner row (-1: wall), side flag and perpendicular sign
+    owner = np.concatenate([a, b, w])
+    partner = np.concatenate([b, a, np.full(len(w), -1)])
+    point = np.concatenate([pp.point, pp.point, walls.point])
+    t, perp = _side_offsets(frame, owner, point)
+    flat = (np.abs(t) < 0.5 * frame.length[owner] - tol * frame.radius[owner]) & \
+        (frame.length[owner] > 0)
+    sign = np.sign(perp)
+    rattler = np.zeros(n, bool)
+    while True:
+        alive = ~rattler[owner] & ((partner < 0) | ~rattler[np.maximum(partner, 0)])
+        c = np.bincount(owner[alive], minlength=n)
+        new = (c <= 1) & ~rattler
+        two = np.flatnonzero((c == 2) & ~rattler)
+        if len(two):
+            sel = alive & np.isin(owner, two)
+            o, f, s = owner[sel], flat[sel], sign[sel]
+            order = np.argsort(o, kind="stable")
+            o, f, s = o[order], f[order], s[order]
+            opposite = f[0::2] & f[1::2] & (s[0::2] * s[1::2] < 0)
+            new[o[0::2][~opposite]] = True
+        if not new.any():
+            return rattler
+        rattler |= new
+
+
 class ContactNumber(Observable):
     """Contact numbers of one frame, with and without rattlers.
 
-    ``c_min`` is the smallest contact count of a load-bearing particle (3-D spheres 4;
-    see science.md for rods and 2-D). Results: ``per_particle`` (N,) ``C_i``,
-    ``z`` mean ``<C>``, ``rattlers`` (N,) bool, ``n_rattlers``, ``z_rattler_free``,
-    ``distribution`` ``P(C)`` as an array indexed by ``C``.
+    Parameters: ``c_min`` threshold of ``rule="threshold"`` (3-D spheres 4; see
+    :func:`default_c_min`); ``rule`` ``"threshold"`` or ``"2d"`` (module docstring);
+    ``double_parallel``: count parallel side-side contacts as two bonds in ``z_bonds``
+    (default: in 2-D frames only); ``tol``, ``angle_tol`` of the tip and parallel tests.
+
+    Results: ``per_particle`` (N,) ``C_i`` (walls included), ``z`` mean ``<C>`` (particle
+    contacts ``2 N_c / N`` plus wall contacts ``N_w / N``), ``rattlers`` (N,) bool,
+    ``n_rattlers``, ``z_rattler_free`` (each contact once; = ``z_tilde``), ``z_bonds``
+    (rattler-free, parallel side-side contacts twice: the isostatic count ``z`` of
+    science.md), ``distribution`` ``P(C)`` indexed by ``C``, and
+    ``distribution_rattler_free`` (over non-rattlers, contacts among them).
     """
 
-    _results = ("per_particle", "z", "rattlers", "n_rattlers", "z_rattler_free", "distribution")
+    _results = ("per_particle", "z", "rattlers", "n_rattlers", "z_rattler_free", "z_tilde",
+                "z_bonds", "distribution", "distribution_rattler_free")
 
-    def __init__(self, c_min: int = 4):
+    def __init__(self, c_min: int = 4, rule: str = "threshold", double_parallel: bool | None = None,
+                 tol: float = 1e-6, angle_tol: float = 1e-6):
         if c_min < 0:
             raise ValueError(f"c_min must be >= 0, got {c_min}")
-        self.c_min = c_min
+        if rule not in ("threshold", "2d"):
+            raise ValueError(f"rule must be 'threshold' or '2d', got {rule!r}")
+        self.c_min, self.rule, self.double_parallel = c_min, rule, double_parallel
+        self.tol, self.angle_tol = tol, angle_tol
 
     def compute(self, frame: Frame, contacts: Contacts):
+        if contacts is None:
+            raise ValueError("ContactNumber needs a contact table (or geometric_contacts(frame))")
         n = frame.n
-        a = frame.index_of(contacts.i)
-        b = frame.index_of(contacts.j)
-        c = contact_counts(n, a, b)
-        ratt = remove_rattlers(n, a, b, self.c_min)
+        pp, walls = split_wall_contacts(frame, contacts)
+        a = frame.index_of(pp.i)
+        b = frame.index_of(pp.j)
+        fixed = np.bincount(frame.index_of(walls.i), minlength=n)
+        c = contact_counts(n, a, b) + fixed
+        if self.rule == "2d":
+            ratt = remove_rattlers_2d(frame, contacts, self.tol)
+        else:
+            ratt = remove_rattlers(n, a, b, self.c_min, fixed)
         keep = ~(ratt[a] | ratt[b])
+        keep_w = ~ratt[frame.index_of(walls.i)]
         n_bb = int(np.count_nonzero(~ratt))
-        z_rf = 2.0 * np.count_nonzero(keep) / n_bb if n_bb else 0.0
-        self._set(per_particle=c, z=2.0 * len(a) / n if n else 0.0, rattlers=ratt,
-                  n_rattlers=int(ratt.sum()), z_rattler_free=z_rf,
-                  distribution=np.bincount(c) / n if n else np.zeros(1))
+        double = self.double_parallel if self.double_parallel is not None else frame.dim == 2
+        bonds = np.ones(len(a), np.int64)
+        if double and len(a):
+            bonds += parallel_side_contacts(frame, pp, self.angle_tol, self.tol)
+        n_once = 2.0 * np.count_nonzero(keep) + np.count_nonzero(keep_w)
+        n_bonds = 2.0 * np.sum(bonds[keep]) + np.count_nonzero(keep_w)
+        z_rf = n_once / n_bb if n_bb else 0.0
+        c_rf = contact_counts(n, a[keep], b[keep])[~ratt] + fixed[~ratt]
+        self._set(per_particle=c, z=(2.0 * len(a) + walls.n) / n if n else 0.0, rattlers=ratt,
+                  n_rattlers=int(ratt.sum()), z_rattler_free=z_rf, z_tilde=z_rf,
+                  z_bonds=n_bonds / n_bb if n_bb else 0.0,
+                  distribution=np.bincount(c) / n if n else np.zeros(1),
+                  distribution_rattler_free=np.bincount(c_rf) / n_bb if n_bb else np.zeros(1))
         return self
 
 
-def geometric_contacts(frame: Frame, tolerance: float = 0.0) -> Contacts:
-    """Contacts of spheres from positions alone: pairs with centre distance below
-    ``R_i + R_j + tolerance`` (minimum image on periodic axes). Forces are unknown
-    (zero); overlaps may be negative down to ``-tolerance``. Uses scipy's cKDTree.
+class ContactTypes(Observable):
+    """Tip-tip, tip-side and side-side contacts (particle-particle rows only).
 
-    Spherocylinders (``length > 0``) need the segment geometry of issue 4 and are
-    refused here.
+    Results: ``types`` (C,) codes (:data:`TIP_TIP`, :data:`TIP_SIDE`, :data:`SIDE_SIDE`),
+    ``counts`` (3,), ``fractions`` (3,) in the order of :data:`TYPE_NAMES`,
+    ``parallel_side`` (C,) bool: side-side contacts of parallel spines.
     """
+
+    _results = ("types", "counts", "fractions", "parallel_side")
+
+    def __init__(self, tol: float = 1e-6, angle_tol: float = 1e-6):
+        self.tol, self.angle_tol = tol, angle_tol
+
+    def compute(self, frame: Frame, contacts: Contacts):
+        pp, _ = split_wall_contacts(frame, contacts)
+        types = contact_types(frame, pp, self.tol)
+        counts = np.bincount(types, minlength=3)
+        self._set(types=types, counts=counts,
+                  fractions=counts / counts.sum() if counts.sum() else np.full(3, np.nan),
+                  parallel_side=parallel_side_contacts(frame, pp, self.angle_tol, self.tol))
+        return self
+
+
+# -- contacts from positions -----------------------------------------------------------------
+def geometric_contacts(frame: Frame, tolerance: float = 0.0) -> Contacts:
+    """Contacts from positions alone: pairs whose spines are closer than
+    ``R_i + R_j + tolerance`` (minimum image on periodic axes). Forces are unknown (zero);
+    overlaps ``delta = R_i + R_j - d`` may be negative down to ``-tolerance``.
+
+    Spheres use centre distances (scipy cKDTree); spherocylinders the closest points of
+    their spines (:func:`analysis.geometry.spine_closest`, i.e.
+    :func:`pysim.geometry.segment_closest_many`). Normal from the closest point on ``i``
+    to that on ``j``; contact point ``p_i + (R_i - delta/2) n``.
+    """
+    if tolerance < 0:
+        raise ValueError(f"tolerance must be >= 0, got {tolerance}")
+    if frame.n < 2:
+        return Contacts.empty(frame.step)
     if np.any(frame.length > 0):
-        raise NotImplementedError("geometric contacts of spherocylinders are not implemented yet")
+        return _rod_contacts(frame, tolerance)
     rmax = float(frame.radius.max())
-    a, b = _pairs_within(frame, 2.0 * rmax + tolerance)
-    d = frame.x[b] - frame.x[a]
-    d -= frame.box * np.floor(d / frame.box + 0.5) * frame.periodic
+    a, b = pairs_within(frame, 2.0 * rmax + tolerance)
+    d = frame.minimum_image(frame.x[b] - frame.x[a])
     r = np.linalg.norm(d, axis=1)
     overlap = frame.radius[a] + frame.radius[b] - r
     keep = overlap > -tolerance
-    a, b, d, r, overlap = a[keep], b[keep], d[keep], r[keep], overlap[keep]
+    return _table(frame, a[keep], b[keep], frame.x[a[keep]], d[keep], r[keep], overlap[keep])
+
+
+def _table(frame, a, b, pa, d, r, overlap):
     order = np.lexsort((b, a))
-    a, b, d, r, overlap = a[order], b[order], d[order], r[order], overlap[order]
-    n = d / r[:, None]
-    point = frame.x[a] + (frame.radius[a] - 0.5 * overlap)[:, None] * n
+    a, b, pa, d, r, overlap = a[order], b[order], pa[order], d[order], r[order], overlap[order]
+    n = d / np.where(r > 0, r, 1.0)[:, None]
+    point = pa + (frame.radius[a] - 0.5 * overlap)[:, None] * n
     return Contacts(step=frame.step, i=frame.ids[a], j=frame.ids[b], point=point, normal=n,
                     overlap=overlap, force=np.zeros_like(n))
 
 
-def _pairs_within(frame: Frame, cutoff: float):
-    """Index pairs ``a < b`` closer than ``cutoff`` (minimum image on periodic axes).
+def _rod_contacts(frame: Frame, tolerance: float) -> Contacts:
+    from analysis.geometry import spine_closest
+
+    reach = 0.5 * frame.length + frame.radius
+    srt = np.sort(reach)
+    a, b = pairs_within(frame, float(srt[-1] + srt[-2]) + tolerance)
+    xb = frame.x[a] + frame.minimum_image(frame.x[b] - frame.x[a])
+    s, t = spine_closest(frame.x[a], frame.axis[a], frame.length[a], xb, frame.axis[b],
+                         frame.length[b])
+    pa = frame.x[a] + s[:, None] * frame.axis[a]
+    d = xb + t[:, None] * frame.axis[b] - pa
+    r = np.linalg.norm(d, axis=1)
+    # spines that cross (d = 0): the normal is along u_i x u_j (any perpendicular if parallel)
+    zero = r == 0
+    if np.any(zero):
+        c = np.cross(frame.axis[a[zero]], frame.axis[b[zero]])
+        flat = np.linalg.norm(c, axis=1) == 0
+        c[flat] = np.cross(frame.axis[a[zero]][flat], [1.0, 0.0, 0.0])
+        c[np.linalg.norm(c, axis=1) == 0] = [0.0, 1.0, 0.0]
+        d[zero] = 1e-300 * c / np.linalg.norm(c, axis=1)[:, None]
+        r[zero] = np.linalg.norm(d[zero], axis=1)
+    overlap = frame.radius[a] + frame.radius[b] - r
+    keep = overlap > -tolerance
+    return _table(frame, a[keep], b[keep], pa[keep], d[keep], r[keep], overlap[keep])
+
+
+def pairs_within(frame: Frame, cutoff: float):
+    """Index pairs ``a < b`` whose centres are closer than ``cutoff`` (minimum image on
+    periodic axes).
 
     cKDTree handles all-periodic boxes natively; with some walls, ghost copies of the
     particles within ``cutoff`` of a periodic face are added instead.
@@ -123,5 +314,124 @@ def _pairs_within(frame: Frame, cutoff: float):
     a, b = own[pairs[:, 0]], own[pairs[:, 1]]
     keep = a != b
     lo, hi = np.minimum(a[keep], b[keep]), np.maximum(a[keep], b[keep])
+    if len(lo) == 0:
+        return lo, hi
     uniq = np.unique(np.column_stack([lo, hi]), axis=0)
     return uniq[:, 0], uniq[:, 1]
+
+
+_pairs_within = pairs_within  # the name used before
+
+
+# -- glued-sphere rods -------------------------------------------------------------------------
+def glued_bodies(frame: Frame, body) -> tuple[Frame, np.ndarray]:
+    """Rods made of glued equal spheres as one frame of spherocylinders.
+
+    ``body`` (N,) labels each sphere with its body id (e.g. the LAMMPS molecule id).
+    Returns the body frame (ids = sorted body labels; centre = mean of the sphere
+    centres, unwrapped by minimum image; axis = principal axis of the sphere centres,
+    oriented from the body's first sphere to its last in row order; spine length ``L`` =
+    extent of the sphere centres along it; radius = the largest sphere radius) and the
+    body row of every sphere (N,).
+    """
+    body = np.asarray(body)
+    if body.shape != (frame.n,):
+        raise ValueError(f"body must label each of the {frame.n} spheres, got shape {body.shape}")
+    labels, row = np.unique(body, return_inverse=True)
+    m = len(labels)
+    first = np.full(m, frame.n)
+    np.minimum.at(first, row, np.arange(frame.n))
+    last = np.full(m, -1)
+    np.maximum.at(last, row, np.arange(frame.n))
+    rel = frame.minimum_image(frame.x - frame.x[first[row]])
+    count = np.bincount(row, minlength=m).astype(float)
+    mean = np.zeros((m, 3))
+    np.add.at(mean, row, rel)
+    mean /= count[:, None]
+    dev = rel - mean[row]
+    gyr = np.zeros((m, 3, 3))
+    np.add.at(gyr, row, dev[:, :, None] * dev[:, None, :])
+    _, vec = np.linalg.eigh(gyr)
+    axis = vec[:, :, -1]
+    single = count == 1
+    axis[single] = [0.0, 0.0, 1.0]
+    span = rel[last] - rel[first]
+    flip = np.sum(span * axis, axis=1) < 0
+    axis[flip] *= -1
+    proj = np.sum(dev * axis[row], axis=1)
+    pmax = np.full(m, -np.inf)
+    pmin = np.full(m, np.inf)
+    np.maximum.at(pmax, row, proj)
+    np.minimum.at(pmin, row, proj)
+    radius = np.zeros(m)
+    np.maximum.at(radius, row, frame.radius)
+    centre = frame.x[first] + mean
+    bodies = Frame(step=frame.step, ids=labels.astype(np.int64), types=np.ones(m, np.int64),
+                   x=centre, radius=radius, axis=axis, length=np.where(single, 0.0, pmax - pmin),
+                   box_lo=frame.box_lo.copy(), box=frame.box.copy(), periodic=frame.periodic.copy(),
+                   dimension=frame.dimension)
+    return bodies, row
+
+
+def merge_glued_contacts(frame: Frame, contacts: Contacts, body) -> tuple[Contacts, np.ndarray]:
+    """Body-body contacts of glued-sphere rods from their sphere-sphere contacts.
+
+    Contacts inside one body are dropped; the contacts between two bodies become one row:
+    ``i < j`` body ids, force = sum of the forces on ``i``, point = force-weighted mean of
+    the points (plain mean when all forces vanish; minimum image), normal = normalised
+    sum of the normals, overlap = the largest. Wall rows (``j`` not a particle) are
+    merged per (body, wall). Returns the table and the number of sphere contacts merged
+    into each row.
+    """
+    body = np.asarray(body)
+    labels, row = np.unique(body, return_inverse=True)
+    pp, walls = split_wall_contacts(frame, contacts)
+    bi = row[frame.index_of(pp.i)]
+    bj = row[frame.index_of(pp.j)]
+    inter = bi != bj
+    bi, bj = bi[inter], bj[inter]
+    normal, force, point, overlap = (pp.normal[inter], pp.force[inter], pp.point[inter],
+                                     pp.overlap[inter])
+    swap = bi > bj
+    bi, bj = np.where(swap, bj, bi), np.where(swap, bi, bj)
+    normal = np.where(swap[:, None], -normal, normal)
+    force = np.where(swap[:, None], -force, force)
+    # wall rows: keyed by (body, -1 - wall index) so that they sort after particle pairs
+    wb = row[frame.index_of(walls.i)]
+    wids, wk = np.unique(walls.j, return_inverse=True)
+    keys = np.column_stack([np.concatenate([bi, wb]),
+                            np.concatenate([bj, len(labels) + wk])])
+    normal = np.concatenate([normal, walls.normal])
+    force = np.concatenate([force, walls.force])
+    point = np.concatenate([point, walls.point])
+    overlap = np.concatenate([overlap, walls.overlap])
+    if len(keys) == 0:
+        return Contacts.empty(contacts.step), np.zeros(0, np.int64)
+    uniq, g = np.unique(keys, axis=0, return_inverse=True)
+    g = g.ravel()
+    m = len(uniq)
+    mult = np.bincount(g, minlength=m)
+    f_sum = np.zeros((m, 3))
+    np.add.at(f_sum, g, force)
+    n_sum = np.zeros((m, 3))
+    np.add.at(n_sum, g, normal)
+    first = np.full(m, len(g))
+    np.minimum.at(first, g, np.arange(len(g)))
+    rel = frame.minimum_image(point - point[first[g]])
+    fmag = np.linalg.norm(force, axis=1)
+    wsum = np.bincount(g, weights=fmag, minlength=m)
+    wt = np.where(wsum[g] > 0, fmag / np.where(wsum[g] > 0, wsum[g], 1.0), 1.0 / mult[g])
+    p_sum = np.zeros((m, 3))
+    np.add.at(p_sum, g, rel * wt[:, None])
+    ov = np.full(m, -np.inf)
+    np.maximum.at(ov, g, overlap)
+    nn = np.linalg.norm(n_sum, axis=1)
+    normal_m = n_sum / np.where(nn > 0, nn, 1.0)[:, None]
+    jb = uniq[:, 1]
+    is_wall = jb >= len(labels)
+    j_ids = np.empty(m, np.int64)
+    j_ids[~is_wall] = labels[jb[~is_wall]]
+    j_ids[is_wall] = wids[jb[is_wall] - len(labels)]
+    out = Contacts(contacts.step, labels[uniq[:, 0]].astype(np.int64), j_ids.astype(np.int64),
+                   point[first] + p_sum, normal_m, ov, f_sum)
+    return out, mult

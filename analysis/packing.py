@@ -1,11 +1,222 @@
-"""Packing fraction."""
+"""Packing fraction: global, in horizontal slabs (density profile), per layer, and of the
+filled part of a container (science.md section 5).
+
+* global: ``phi = sum_i V_i / V_box`` (2-D: areas over the box area);
+* slab ``[h_k, h_k+1]``: ``phi_k = sum_i V_i(h_k < z < h_k+1) / (A (h_k+1 - h_k))`` where
+  ``V_i(...)`` is the exact part of particle ``i`` inside the slab
+  (:func:`analysis.geometry.measure_below`) and ``A`` the horizontal cross-section of
+  the container (box area by default; pass ``area`` for a cylinder);
+* filled part: ``phi_fill = sum_i V_i(z < H) / (A (H - z_0))`` with ``z_0`` the bottom
+  and ``H`` the top surface of the grains: the mean over horizontal columns (squares of
+  side ``column`` in 3-D, intervals in 2-D) of the highest grain surface point whose
+  centre lies in the column.
+
+The vertical axis is ``z`` in 3-D and ``y`` in 2-D (:attr:`analysis.frame.Frame.vertical`).
+"""
 from __future__ import annotations
 
 import numpy as np
 
+from analysis.base import Observable
 from analysis.frame import Frame
+from analysis.geometry import measure_below
 
 
 def packing_fraction(frame: Frame) -> float:
-    """Global packing fraction ``phi = sum_i V_i / V_box`` (spherocylinder volumes)."""
-    return float(np.sum(frame.particle_volumes()) / frame.volume)
+    """Global packing fraction ``phi = sum_i V_i / V_box`` (spherocylinder volumes; in
+    2-D areas over the box area)."""
+    return float(np.sum(frame.particle_measures()) / frame.measure)
+
+
+def horizontal_area(frame: Frame, axis: int | None = None) -> float:
+    """Cross-section of the box perpendicular to ``axis`` (2-D: a length)."""
+    axis = frame.vertical if axis is None else axis
+    others = [k for k in range(frame.dim) if k != axis]
+    return float(np.prod(frame.box[others]))
+
+
+def _images(frame: Frame, axis: int):
+    """Centres and axis components along ``axis``, with periodic images of particles
+    sticking out of the box so that slabs inside the box get every part."""
+    lo, length = frame.box_lo[axis], frame.box[axis]
+    c = frame.x[:, axis].copy()
+    rows = np.arange(frame.n)
+    if frame.periodic[axis]:
+        c = lo + np.mod(c - lo, length)
+        half = 0.5 * frame.length * np.abs(frame.axis[:, axis]) + frame.radius
+        below = c - half < lo
+        above = c + half > lo + length
+        c = np.concatenate([c, c[below] + length, c[above] - length])
+        rows = np.concatenate([rows, rows[below], rows[above]])
+    return c, rows
+
+
+def cumulative_measure(frame: Frame, levels, axis: int | None = None) -> np.ndarray:
+    """``F(h)`` (K,): total grain volume (2-D area) below each level ``h`` along ``axis``
+    (default vertical), exact; periodic images are included on a periodic axis."""
+    axis = frame.vertical if axis is None else axis
+    levels = np.atleast_1d(np.asarray(levels, dtype=np.float64))
+    c, rows = _images(frame, axis)
+    uv = frame.axis[rows, axis]
+    r = frame.radius[rows]
+    ln = frame.length[rows]
+    half = 0.5 * ln * np.abs(uv) + r
+    lo, hi = c - half, c + half
+    full = frame.particle_measures()[rows]
+    order = np.argsort(hi)
+    done = np.concatenate([[0.0], np.cumsum(full[order])])
+    out = done[np.searchsorted(hi[order], levels, side="right")]
+    # particles cut by a level: exact partial measure
+    p, k = np.nonzero((lo[:, None] < levels[None, :]) & (levels[None, :] < hi[:, None]))
+    if len(p):
+        part = measure_below(c[p], uv[p], r[p], ln[p], levels[k], frame.dim)
+        np.add.at(out, k, part)
+    return out
+
+
+def slab_measures(frame: Frame, edges, axis: int | None = None) -> np.ndarray:
+    """Grain volume (2-D area) inside each slab between consecutive ``edges`` (K-1,)."""
+    edges = _check_edges(edges)
+    return np.diff(cumulative_measure(frame, edges, axis))
+
+
+def slab_packing_fraction(frame: Frame, edges, axis: int | None = None,
+                          area: float | None = None) -> np.ndarray:
+    """Packing fraction of each slab between consecutive ``edges`` (K-1,):
+    grain volume in the slab over ``area * thickness`` (``area`` defaults to the box
+    cross-section)."""
+    edges = _check_edges(edges)
+    area = horizontal_area(frame, axis) if area is None else float(area)
+    if area <= 0:
+        raise ValueError(f"area must be > 0, got {area}")
+    return slab_measures(frame, edges, axis) / (area * np.diff(edges))
+
+
+def _check_edges(edges) -> np.ndarray:
+    edges = np.asarray(edges, dtype=np.float64)
+    if edges.ndim != 1 or len(edges) < 2 or np.any(np.diff(edges) <= 0):
+        raise ValueError(f"slab edges must be at least two strictly increasing values, got "
+                         f"{np.array2string(edges[:6])}")
+    return edges
+
+
+def layer_edges(bottom: float, thickness: float, n_layers: int) -> np.ndarray:
+    """Edges of ``n_layers`` layers of the given ``thickness`` stacked from ``bottom``
+    (e.g. the four 4 mm layers of the tapping study)."""
+    if thickness <= 0 or n_layers < 1:
+        raise ValueError(f"need thickness > 0 and n_layers >= 1, got {thickness}, {n_layers}")
+    return bottom + thickness * np.arange(n_layers + 1)
+
+
+def surface_height(frame: Frame, axis: int | None = None, column: float | None = None,
+                   method: str = "columns") -> float:
+    """Height of the top surface of the grains along ``axis`` (default vertical).
+
+    ``method="columns"``: mean over horizontal columns of side ``column`` (default the
+    largest particle extent ``L + D``) of the highest surface point among the particles
+    whose centre lies in the column; ``"max"``: the highest surface point of all.
+    """
+    axis = frame.vertical if axis is None else axis
+    if frame.n == 0:
+        raise ValueError("no particles: the surface height is undefined")
+    top = frame.extent(axis)[1]
+    if method == "max":
+        return float(top.max())
+    if method != "columns":
+        raise ValueError(f"method must be 'columns' or 'max', got {method!r}")
+    column = float(np.max(frame.length + 2 * frame.radius)) if column is None else float(column)
+    if column <= 0:
+        raise ValueError(f"column must be > 0, got {column}")
+    others = [k for k in range(frame.dim) if k != axis]
+    rel = (frame.x[:, others] - frame.box_lo[others])
+    rel = np.where(frame.periodic[others], np.mod(rel, frame.box[others]), rel)
+    ncell = np.maximum(np.round(frame.box[others] / column).astype(int), 1)
+    cell = np.clip(np.floor(rel / frame.box[others] * ncell).astype(int), 0, ncell - 1)
+    key = np.ravel_multi_index(tuple(cell.T), tuple(ncell))
+    best = np.full(int(np.prod(ncell)), -np.inf)
+    np.maximum.at(best, key, top)
+    return float(best[np.isfinite(best)].mean())
+
+
+class PackingProfile(Observable):
+    """Density profile: packing fraction in horizontal slabs.
+
+    Parameters: ``thickness`` of the slabs (from the bottom of the box up to its top)
+    or explicit ``edges``; ``axis`` (default vertical); ``area`` of the container
+    cross-section (default the box's). Results: ``edges`` (K+1,), ``centers`` (K,),
+    ``phi`` (K,), ``grain_measure`` (K,) grain volume (2-D area) per slab, ``depth``
+    (K,) distance of the slab centres below the top surface (:func:`surface_height`).
+    """
+
+    _results = ("edges", "centers", "phi", "grain_measure", "depth")
+
+    def __init__(self, thickness: float | None = None, edges=None, axis: int | None = None,
+                 area: float | None = None):
+        if (thickness is None) == (edges is None):
+            raise ValueError("give exactly one of thickness or edges")
+        if thickness is not None and thickness <= 0:
+            raise ValueError(f"thickness must be > 0, got {thickness}")
+        self.thickness = thickness
+        self.edges = None if edges is None else _check_edges(edges)
+        self.axis = axis
+        self.area = area
+
+    def compute(self, frame: Frame, contacts=None):
+        axis = frame.vertical if self.axis is None else self.axis
+        if self.edges is not None:
+            edges = self.edges
+        else:
+            lo, hi = frame.box_lo[axis], frame.box_lo[axis] + frame.box[axis]
+            k = max(int(np.floor((hi - lo) / self.thickness + 1e-9)), 1)
+            edges = lo + self.thickness * np.arange(k + 1)
+        area = horizontal_area(frame, axis) if self.area is None else float(self.area)
+        m = slab_measures(frame, edges, axis)
+        centers = 0.5 * (edges[1:] + edges[:-1])
+        self._set(edges=edges, centers=centers, phi=m / (area * np.diff(edges)), grain_measure=m,
+                  depth=surface_height(frame, axis) - centers)
+        return self
+
+
+class FilledPackingFraction(Observable):
+    """Packing fraction of the filled part of a container (tapping study).
+
+    ``phi_fill = sum_i V_i(z < H) / (A (H - z_0))``: ``z_0`` = ``bottom`` (default the
+    box bottom), ``H`` the top surface (:func:`surface_height` with ``column`` and
+    ``method``), ``A`` = ``area`` (default the box cross-section; a cylinder of diameter
+    ``D_c``: ``pi D_c^2 / 4``). Results: ``phi``, ``top`` ``H``, ``height`` ``H - z_0``,
+    ``grain_measure`` (grain volume below ``H``).
+    """
+
+    _results = ("phi", "top", "height", "grain_measure")
+
+    def __init__(self, bottom: float | None = None, area: float | None = None,
+                 column: float | None = None, method: str = "columns", axis: int | None = None):
+        if method not in ("columns", "max"):
+            raise ValueError(f"method must be 'columns' or 'max', got {method!r}")
+        self.bottom, self.area, self.column, self.method, self.axis = bottom, area, column, method, axis
+
+    def compute(self, frame: Frame, contacts=None):
+        axis = frame.vertical if self.axis is None else self.axis
+        bottom = frame.box_lo[axis] if self.bottom is None else float(self.bottom)
+        area = horizontal_area(frame, axis) if self.area is None else float(self.area)
+        top = surface_height(frame, axis, self.column, self.method)
+        if top <= bottom:
+            raise ValueError(f"top surface {top:.6g} is not above the bottom {bottom:.6g}")
+        below = float(cumulative_measure(frame, [top], axis)[0] - cumulative_measure(frame, [bottom], axis)[0])
+        self._set(phi=below / (area * (top - bottom)), top=top, height=top - bottom,
+                  grain_measure=below)
+        return self
+
+
+def moving_average(values, window: int) -> np.ndarray:
+    """Centred running mean over ``window`` samples (odd), shorter at the ends: used to
+    average a packing fraction over one tap oscillation."""
+    values = np.asarray(values, dtype=np.float64)
+    if window < 1 or window % 2 == 0:
+        raise ValueError(f"window must be an odd number >= 1, got {window}")
+    k = window // 2
+    c = np.concatenate([[0.0], np.cumsum(values)])
+    idx = np.arange(len(values))
+    lo = np.maximum(idx - k, 0)
+    hi = np.minimum(idx + k + 1, len(values))
+    return (c[hi] - c[lo]) / (hi - lo)
