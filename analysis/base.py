@@ -46,6 +46,12 @@ class Observable:
                     f"{type(self).__name__}.{name} is not available: call compute() first") from None
         raise AttributeError(name)
 
+    def __setattr__(self, name, value):
+        if name in type(self)._results:
+            raise AttributeError(f"{type(self).__name__}: {name!r} is a result name; store "
+                                 "parameters under another name")
+        super().__setattr__(name, value)
+
     @property
     def results(self) -> dict:
         """All results computed so far, by name (empty before ``compute``)."""

@@ -205,9 +205,10 @@ class CagingNumber(Observable):
         if trials < 1:
             raise ValueError(f"trials must be >= 1, got {trials}")
         self.radius, self.length, self.dim = float(radius), float(length), dim
-        self.dofs = tuple(dofs) if dofs is not None else default_dofs(dim, length, block_axial)
-        self.blocked = _dof_index(dim, length, self.dofs)
-        self.trials, self.seed, self.max_contacts = int(trials), seed, int(max_contacts)
+        self.blocked_dofs = tuple(dofs) if dofs is not None else default_dofs(dim, length,
+                                                                               block_axial)
+        self.blocked = _dof_index(dim, length, self.blocked_dofs)
+        self.n_trials, self.seed, self.max_contacts = int(trials), seed, int(max_contacts)
 
     def one_trial(self, rng) -> int:
         """Contacts placed until caged in one trial."""
@@ -218,7 +219,7 @@ class CagingNumber(Observable):
             if n > len(rows):
                 if len(rows) >= self.max_contacts:
                     raise RuntimeError(f"not caged after {self.max_contacts} contacts "
-                                       f"(dofs {self.dofs}); raise max_contacts")
+                                       f"(dofs {self.blocked_dofs}); raise max_contacts")
                 p, m = surface_contacts(rng, 16, self.radius, self.length, self.dim)
                 rows = np.vstack([rows, constraint_rows(p, m)])
             if is_caged(rows[:n], self.blocked):
@@ -227,11 +228,11 @@ class CagingNumber(Observable):
 
     def compute(self):
         rng = np.random.default_rng(self.seed)
-        samples = np.array([self.one_trial(rng) for _ in range(self.trials)])
+        samples = np.array([self.one_trial(rng) for _ in range(self.n_trials)])
         std = float(samples.std(ddof=1)) if len(samples) > 1 else float("nan")
         self._set(mean=float(samples.mean()), std=std, stderr=std / np.sqrt(len(samples)),
                   samples=samples, distribution=np.bincount(samples) / len(samples),
-                  dofs=self.dofs, trials=self.trials)
+                  dofs=self.blocked_dofs, trials=self.n_trials)
         return self
 
 

@@ -59,7 +59,8 @@ class JanssenFit(Observable):
             raise ValueError(f"walls must be 'cylinder' or 'slot', got {walls!r}")
         if mu_w is not None and K is not None:
             raise ValueError("give mu_w (to get K) or K (to get mu_w), not both")
-        self.form, self.width, self.mu_w, self.K, self.walls = form, float(width), mu_w, K, walls
+        self.form, self.width, self.walls = form, float(width), walls
+        self.friction, self.k_ratio = mu_w, K
 
     def compute(self, depth, sigma, sigma_err=None):
         depth = np.asarray(depth, dtype=np.float64)
@@ -92,11 +93,11 @@ class JanssenFit(Observable):
         if self.form == "classical":
             factor = 4.0 if self.walls == "cylinder" else 2.0
             lam, lam_err = popt[1], perr[1]
-            if self.mu_w is not None:  # K = W / (factor mu_w lambda)
-                k = self.width / (factor * self.mu_w * lam)
+            if self.friction is not None:  # K = W / (factor mu_w lambda)
+                k = self.width / (factor * self.friction * lam)
                 k_err = k * lam_err / lam
-            if self.K is not None:
-                mu = self.width / (factor * self.K * lam)
+            if self.k_ratio is not None:
+                mu = self.width / (factor * self.k_ratio * lam)
                 mu_err = mu * lam_err / lam
         self._set(sigma_m=float(popt[0]), sigma_m_err=float(perr[0]), h_s=float(popt[1]),
                   h_s_err=float(perr[1]), cov=cov, K=float(k), K_err=float(k_err),

@@ -157,14 +157,14 @@ class PackingProfile(Observable):
         if thickness is not None and thickness <= 0:
             raise ValueError(f"thickness must be > 0, got {thickness}")
         self.thickness = thickness
-        self.edges = None if edges is None else _check_edges(edges)
+        self.slab_edges = None if edges is None else _check_edges(edges)
         self.axis = axis
         self.area = area
 
     def compute(self, frame: Frame, contacts=None):
         axis = frame.vertical if self.axis is None else self.axis
-        if self.edges is not None:
-            edges = self.edges
+        if self.slab_edges is not None:
+            edges = self.slab_edges
         else:
             lo, hi = frame.box_lo[axis], frame.box_lo[axis] + frame.box[axis]
             k = max(int(np.floor((hi - lo) / self.thickness + 1e-9)), 1)

@@ -142,14 +142,14 @@ class StressProfile(Observable):
             raise ValueError("give exactly one of thickness or edges")
         if thickness is not None and not thickness > 0:
             raise ValueError(f"thickness must be > 0, got {thickness}")
-        self.thickness, self.edges, self.top = thickness, edges, top
+        self.thickness, self.slab_edges, self.top = thickness, edges, top
 
     def compute(self, frame: Frame, contacts: Contacts):
         from analysis.packing import surface_height
 
         v, d = frame.vertical, frame.dim
-        if self.edges is not None:
-            edges = np.asarray(self.edges, dtype=np.float64)
+        if self.slab_edges is not None:
+            edges = np.asarray(self.slab_edges, dtype=np.float64)
         else:
             k = max(int(np.floor(frame.box[v] / self.thickness + 1e-9)), 1)
             edges = frame.box_lo[v] + self.thickness * np.arange(k + 1)

@@ -39,5 +39,5 @@ def test_stress_from_contact_table_equals_engine_virial():
     c = Contacts(st.step, ids[ij[:, 0]], ids[ij[:, 1]], rec[:, 0:3], rec[:, 3:6], rec[:, 6],
                  rec[:, 7:10])
     assert c.n > 100
-    sim._forces()  # virial of the current state (velocities at the end of the step)
+    sim.compute_forces()  # virial of the current state (velocities at the end of the step)
     np.testing.assert_allclose(stress_tensor(fr, c), sim.stress(), rtol=1e-9, atol=1e-12)

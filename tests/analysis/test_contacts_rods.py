@@ -1,0 +1,247 @@
+"""Contacts of spherocylinders: geometry against brute force, lattices at contact, contact
+types, the 2-D bond counting and rattler rule, glued-sphere rods and walls."""
+import numpy as np
+import pytest
+
+from analysis.contacts import (SIDE_SIDE, TIP_SIDE, TIP_TIP, ContactNumber, ContactTypes,
+                               contact_types, geometric_contacts, glued_bodies,
+                               merge_glued_contacts, remove_rattlers_2d)
+from analysis.frame import Contacts
+from analysis.theory import isostatic_z
+from analysis.walls import CylinderWall, PlaneWall, wall_contacts
+from tests.analysis.helpers import cubic, frame_of, random_unit
+
+
+def brute_spine_distance(xa, ua, la, xb, ub, lb, k=301):
+    s = np.linspace(-la / 2, la / 2, k)[:, None]
+    t = np.linspace(-lb / 2, lb / 2, k)[:, None]
+    pa, pb = xa + s * ua, xb + t * ub
+    return np.min(np.linalg.norm(pa[:, None] - pb[None], axis=2))
+
+
+def test_rod_contacts_match_brute_force(rng):
+    n, box, r = 40, 6.0, 0.3
+    x = rng.uniform(0, box, size=(n, 3))
+    u = random_unit(rng, n)
+    ln = rng.uniform(0.0, 1.5, n)
+    fr = frame_of(x, r, [box] * 3, axis=u, length=ln)
+    tol = 0.05
+    c = geometric_contacts(fr, tolerance=tol)
+    found = {(int(i), int(j)): k for k, (i, j) in enumerate(zip(c.i, c.j))}
+    for a in range(n):
+        for b in range(a + 1, n):
+            xb = x[a] + fr.minimum_image(x[b] - x[a])
+            d = brute_spine_distance(x[a], u[a], ln[a], xb, u[b], ln[b])
+            h = max(ln[a], ln[b]) / 300  # sampling resolution
+            key = (a + 1, b + 1)
+            if d < 2 * r + tol - h:
+                assert key in found
+                k = found[key]
+                assert 2 * r - c.overlap[k] <= d + 1e-12
+                assert 2 * r - c.overlap[k] == pytest.approx(d, abs=h)
+            elif d > 2 * r + tol + h:
+                assert key not in found
+    # geometry of each row: unit normal from the spine of i to that of j, point between
+    for k in range(c.n):
+        a, b = c.i[k] - 1, c.j[k] - 1
+        assert np.linalg.norm(c.normal[k]) == pytest.approx(1.0)
+        # moving j along the normal by the overlap brings the pair to touching
+        xb = x[a] + fr.minimum_image(x[b] - x[a]) + (c.overlap[k] + 1e-9) * c.normal[k]
+        assert brute_spine_distance(x[a], u[a], ln[a], xb, u[b], ln[b], 101) >= 2 * r - 1e-3
+
+
+def test_swapping_translating_and_rotating_leave_rod_contacts_unchanged(rng):
+    n = 30
+    x = rng.uniform(0, 5, size=(n, 3))
+    u = random_unit(rng, n)
+    ln = rng.uniform(0.5, 1.5, n)
+    base = frame_of(x, 0.3, [20.0] * 3, axis=u, length=ln, periodic=False)
+    c0 = geometric_contacts(base, 0.02)
+    r, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    moved = frame_of(x @ r.T + 7.0, 0.3, [20.0] * 3, axis=-(u @ r.T), length=ln, periodic=False)
+    c1 = geometric_contacts(moved, 0.02)
+    assert c1.i.tolist() == c0.i.tolist() and c1.j.tolist() == c0.j.tolist()
+    np.testing.assert_allclose(c1.overlap, c0.overlap, atol=1e-12)
+    np.testing.assert_allclose(c1.normal, c0.normal @ r.T, atol=1e-9)
+    order = np.arange(n)[::-1]
+    rev = frame_of(x[order], 0.3, [20.0] * 3, axis=u[order], length=ln[order], periodic=False)
+    c2 = geometric_contacts(rev, 0.02)
+    assert c2.n == c0.n
+    np.testing.assert_allclose(np.sort(c2.overlap), np.sort(c0.overlap), atol=1e-12)
+
+
+def test_rods_of_zero_length_are_spheres(rng):
+    x = rng.uniform(0, 4, size=(50, 3))
+    spheres = frame_of(x, 0.4, [4.0] * 3)
+    rods = frame_of(x, 0.4, [4.0] * 3, axis=random_unit(rng, 50), length=np.r_[1e-300, np.zeros(49)])
+    a, b = geometric_contacts(spheres, 0.0), geometric_contacts(rods, 0.0)
+    assert a.i.tolist() == b.i.tolist() and a.j.tolist() == b.j.tolist()
+    np.testing.assert_allclose(a.overlap, b.overlap, atol=1e-12)
+    np.testing.assert_allclose(a.point, b.point, atol=1e-12)
+
+
+def test_stacked_lattice_of_upright_rods_at_contact():
+    """Upright rods (D = 1, L = 2) on a unit square grid, layers stacked tip to tip
+    (period 3 in z): 4 side-side neighbours and 2 tip-tip neighbours each."""
+    x = cubic(0, shape=(4, 4, 3), spacing=1.0) * [1, 1, 3] + [0.5, 0.5, 1.5]
+    fr = frame_of(x, 0.5, [4.0, 4.0, 9.0], axis=[0, 0, 1.0], length=2.0)
+    c = geometric_contacts(fr, tolerance=1e-9)
+    cn = ContactNumber(c_min=6).compute(fr, c)
+    assert np.all(cn.per_particle == 6) and cn.n_rattlers == 0
+    ct = ContactTypes().compute(fr, c)
+    assert ct.counts.tolist() == [len(x), 0, 2 * len(x)]  # tip-tip, tip-side, side-side
+    assert np.all(ct.parallel_side == (ct.types == SIDE_SIDE))
+
+
+def test_two_dimensional_lattice_counts_side_contacts_twice():
+    """2-D rods along x (D = 1, L = 2) on a grid with period L + D along x and D along y:
+    2 tip-tip and 2 parallel side-side contacts each, so z_tilde = 4 but z = 2 + 2 x 2 = 6,
+    the isostatic count of 2-D rods."""
+    g = cubic(0, shape=(4, 6, 1))
+    x = g * [3.0, 1.0, 0.0] + [1.5, 0.5, 0.0]
+    fr = frame_of(x, 0.5, [12.0, 6.0, 1.0], axis=[1.0, 0, 0], length=2.0)
+    assert fr.dim == 2
+    c = geometric_contacts(fr, tolerance=1e-9)
+    cn = ContactNumber(rule="2d").compute(fr, c)
+    assert cn.n_rattlers == 0
+    assert cn.z_tilde == pytest.approx(4.0)
+    assert cn.z_bonds == pytest.approx(6.0) == isostatic_z(2, rod=True)
+    # the side contact point is the middle of the overlap of the projections
+    side = contact_types(fr, c) == SIDE_SIDE
+    a = fr.index_of(c.i[side])
+    np.testing.assert_allclose(c.point[side, 0], fr.x[a, 0], atol=1e-12)
+    # shifting alternate rows by a quarter rod keeps the bonds parallel but moves the point
+    x2 = x + np.where((np.round(x[:, 1] - 0.5) % 2 == 1)[:, None], [0.5, 0, 0], [0, 0, 0])
+    fr2 = frame_of(x2, 0.5, [12.0, 6.0, 1.0], axis=[1.0, 0, 0], length=2.0)
+    c2 = geometric_contacts(fr2, tolerance=1e-9)
+    assert ContactNumber(rule="2d").compute(fr2, c2).z_bonds == pytest.approx(6.0)
+
+
+def test_tip_side_contact_of_a_t_junction():
+    """Rod B stands on the middle of rod A's side: one tip-side contact."""
+    fr = frame_of([[0, 0, 0.0], [0, 0, 2.0]], 0.5, [20.0] * 3, axis=[[1.0, 0, 0], [0, 0, 1.0]],
+                  length=[3.0, 2.0], periodic=False)
+    c = geometric_contacts(fr, tolerance=1e-9)
+    assert c.n == 1 and contact_types(fr, c)[0] == TIP_SIDE
+    np.testing.assert_allclose(c.point[0], [0, 0, 0.5], atol=1e-12)
+    np.testing.assert_allclose(c.normal[0], [0, 0, 1.0], atol=1e-12)
+    # end to end along the axis: tip-tip
+    fr2 = frame_of([[0, 0, 0.0], [3.0, 0, 0]], 0.5, [20.0] * 3, axis=[1.0, 0, 0], length=2.0,
+                   periodic=False)
+    assert contact_types(fr2, geometric_contacts(fr2, 1e-9))[0] == TIP_TIP
+
+
+def wall_table(frame, rows, points, wall_ids):
+    k = len(rows)
+    return Contacts(0, frame.ids[rows], np.asarray(wall_ids), np.asarray(points, float),
+                    np.zeros((k, 3)), np.zeros(k), np.zeros((k, 3)))
+
+
+def test_two_dimensional_rattler_rule():
+    """Hand-made wall contacts (never removed) on one 2-D rod (axis x, L = 2, R = 0.5)
+    and one disk: two contacts survive only on opposite flat sides."""
+    fr = frame_of([[0, 0, 0.0], [5.0, 0, 0]], 0.5, [20.0, 20.0, 1.0], axis=[1.0, 0, 0],
+                  length=[2.0, 0.0], periodic=False, dimension=2)
+
+    def rattlers(points_rod, points_disk):
+        pts = list(points_rod) + list(points_disk)
+        rows = [0] * len(points_rod) + [1] * len(points_disk)
+        return remove_rattlers_2d(fr, wall_table(fr, rows, pts, -1 - np.arange(len(pts))))
+
+    assert rattlers([[0.3, 0.5, 0], [-0.2, -0.5, 0]], []).tolist() == [False, True]
+    assert rattlers([[0.3, 0.5, 0], [-0.2, 0.5, 0]], [])[0]          # same side
+    assert rattlers([[1.4, 0.1, 0], [0.0, -0.5, 0]], [])[0]          # one on a cap
+    assert rattlers([[0.3, 0.5, 0]], [])[0]                          # one contact
+    assert rattlers([[0.0, 0.5, 0], [0.5, -0.5, 0], [1.5, 0, 0]], [])[0] == False  # noqa: E712
+    disk = [[5.5, 0, 0], [4.5, 0, 0]]
+    assert rattlers([], disk)[1]                                     # disks need 3
+    assert not rattlers([], disk + [[5.0, 0.5, 0]])[1]
+
+
+def test_two_dimensional_rattler_removal_cascades():
+    """A chain: rod 1 held by walls on opposite sides, rod 2 touching rod 1 once and a
+    wall once on the same side: rod 2 goes, rod 1 stays."""
+    fr = frame_of([[0, 0, 0.0], [0, 1.0, 0]], 0.5, [20.0, 20.0, 1.0], axis=[1.0, 0, 0],
+                  length=2.0, periodic=False, dimension=2)
+    pp = Contacts(0, np.array([1]), np.array([2]), np.array([[0.0, 0.5, 0]]),
+                  np.array([[0, 1.0, 0]]), np.zeros(1), np.zeros((1, 3)))
+    walls = wall_table(fr, [0, 1], [[0.2, -0.5, 0], [0.4, 1.5, 0]], [-1, -2])
+    r = remove_rattlers_2d(fr, Contacts.concatenate([pp, walls]))
+    # rod 2: contacts at y = 0.5 (below it, side) and 1.5 (above, side): opposite sides
+    assert r.tolist() == [False, False]
+    walls = wall_table(fr, [0], [[0.2, -0.5, 0]], [-1])
+    r = remove_rattlers_2d(fr, Contacts.concatenate([pp, walls]))
+    assert r.tolist() == [True, True]
+
+
+def glued_rod_spheres(centre, direction, n_sph=3, spacing=0.5, radius=0.5):
+    d = np.asarray(direction, float) / np.linalg.norm(direction)
+    s = (np.arange(n_sph) - (n_sph - 1) / 2) * spacing
+    return np.asarray(centre, float) + s[:, None] * d, np.full(n_sph, radius)
+
+
+def test_glued_sphere_rods_merge_into_body_contacts():
+    """Two rods of 3 glued spheres crossing at right angles, the second resting on the
+    first: their sphere-sphere contacts become one body-body contact; contacts inside a
+    body are dropped; forces add up."""
+    xa, ra = glued_rod_spheres([3.0, 3.0, 3.0], [1, 0, 0])
+    xb, rb = glued_rod_spheres([3.0, 3.0, 3.7], [0, 1, 0])
+    fr = frame_of(np.vstack([xa, xb]), np.r_[ra, rb], [10.0] * 3)
+    body = np.array([7, 7, 7, 9, 9, 9])
+    bodies, row = glued_bodies(fr, body)
+    assert bodies.ids.tolist() == [7, 9] and row.tolist() == [0, 0, 0, 1, 1, 1]
+    np.testing.assert_allclose(bodies.x, [[3, 3, 3], [3, 3, 3.7]], atol=1e-12)
+    np.testing.assert_allclose(np.abs(bodies.axis), [[1, 0, 0], [0, 1, 0]], atol=1e-12)
+    np.testing.assert_allclose(bodies.length, 1.0)
+    c = geometric_contacts(fr, 0.0)
+    c.force = -c.normal * (1.0 + np.arange(c.n))[:, None]  # repulsive, all different
+    inter = fr.index_of(c.i) // 3 != fr.index_of(c.j) // 3
+    merged, mult = merge_glued_contacts(fr, c, body)
+    assert inter.sum() == 9  # centre-centre, 4 centre-end and 4 end-end pairs
+    assert merged.n == 1 and mult.tolist() == [9]
+    assert merged.i.tolist() == [7] and merged.j.tolist() == [9]
+    np.testing.assert_allclose(merged.force[0], c.force[inter].sum(axis=0))
+    np.testing.assert_allclose(merged.normal[0], [0, 0, 1.0], atol=1e-12)
+    assert merged.overlap[0] == pytest.approx(c.overlap[inter].max())
+    # contacts between the bodies then count like those of the rods they represent
+    cn = ContactNumber(c_min=0).compute(bodies, merged)
+    assert cn.per_particle.tolist() == [1, 1]
+
+
+def test_glued_body_across_a_periodic_face():
+    xa, ra = glued_rod_spheres([0.1, 2.0, 2.0], [1, 0, 0], n_sph=4)
+    fr = frame_of(np.mod(xa, 5.0), ra, [5.0] * 3)
+    bodies, _ = glued_bodies(fr, np.ones(4))
+    # centre at 0.1 (mod the box), spine 1.5 long along x
+    assert np.mod(bodies.x[0, 0], 5.0) == pytest.approx(0.1)
+    assert bodies.length[0] == pytest.approx(1.5)
+
+
+def test_wall_contacts_of_rods():
+    """A rod lying on the floor touches it twice; a tilted one once; a sphere once; a rod
+    leaning on a cylinder wall touches it with the upper end only."""
+    floor = PlaneWall(point=(0, 0, 0), normal=(0, 0, 1))
+    fr = frame_of([[2, 2, 0.5], [5, 5, 0.5 + np.sin(0.3)], [8, 8, 0.5]], 0.5, [10.0] * 3,
+                  axis=[[1.0, 0, 0], [np.cos(0.3), 0, np.sin(0.3)], [0, 0, 1.0]],
+                  length=[2.0, 2.0, 0.0], periodic=(True, True, False))
+    c = wall_contacts(fr, floor, tolerance=1e-9)
+    assert sorted(c.i.tolist()) == [1, 1, 2, 3]
+    np.testing.assert_allclose(c.normal, np.tile([0, 0, -1.0], (4, 1)))
+    np.testing.assert_allclose(c.point[:, 2], 0.0, atol=1e-12)
+    cyl = CylinderWall(center=(0.0, 0.0), radius=3.0)
+    lean = frame_of([[2.5 - np.cos(1.0), 0, 1.0]], 0.5, [10.0] * 3,
+                    axis=[[np.cos(1.0), 0, np.sin(1.0)]], length=2.0, periodic=False)
+    cw = wall_contacts(lean, cyl, tolerance=1e-9)
+    # upper end at x = 2.5 = R_c - R: touching
+    assert cw.n == 1 and cw.overlap[0] == pytest.approx(0.0, abs=1e-9)
+    np.testing.assert_allclose(cw.normal[0], [1.0, 0, 0])
+    # a floor contact keeps a sphere with 3 neighbours from being a rattler
+    sph = frame_of([[2, 2, 0.5], [3, 2, 0.5], [1, 2, 0.5], [2, 2, 1.5]], 0.5, [10.0] * 3,
+                   periodic=(True, True, False))
+    both = Contacts.concatenate([geometric_contacts(sph, 1e-9), wall_contacts(sph, floor, 1e-9)])
+    cn = ContactNumber(c_min=4).compute(sph, both)
+    assert cn.per_particle.tolist() == [4, 2, 2, 1]
+    assert cn.rattlers.tolist() == [True, True, True, True]  # neighbours fall, then it falls
+    cn0 = ContactNumber(c_min=2).compute(sph, both)
+    assert cn0.rattlers.tolist() == [False, False, False, True]
+    assert cn0.z == pytest.approx((2 * 3 + 3) / 4)
