@@ -186,7 +186,9 @@ class CagingNumber(Observable):
     Parameters: ``radius`` ``R``, ``length`` ``L`` (0: disk/sphere; only ``alpha = L/D``
     matters), ``dim`` 2 or 3, ``block_axial`` (rods: also block the axial translation) or
     explicit ``dofs`` names (module docstring), ``trials``, ``seed``, ``max_contacts``
-    per trial (a trial needing more raises). ``compute()`` takes no frame.
+    per trial (a trial needing more raises). ``compute()`` takes no frame. Trial ``k``
+    draws from its own stream spawned from ``seed`` (:class:`numpy.random.SeedSequence`),
+    so it does not depend on the other trials or on the blocked degrees of freedom.
 
     Results: ``mean``, ``stderr`` (``std / sqrt(trials)``), ``std``, ``samples``
     (trials,) contacts needed per trial, ``distribution`` (``P(N)`` indexed by ``N``),
@@ -227,8 +229,9 @@ class CagingNumber(Observable):
             n += 1
 
     def compute(self):
-        rng = np.random.default_rng(self.seed)
-        samples = np.array([self.one_trial(rng) for _ in range(self.n_trials)])
+        # one independent stream per trial: trial k is the same whatever the others did
+        streams = np.random.SeedSequence(self.seed).spawn(self.n_trials)
+        samples = np.array([self.one_trial(np.random.default_rng(s)) for s in streams])
         std = float(samples.std(ddof=1)) if len(samples) > 1 else float("nan")
         self._set(mean=float(samples.mean()), std=std, stderr=std / np.sqrt(len(samples)),
                   samples=samples, distribution=np.bincount(samples) / len(samples),
