@@ -176,6 +176,19 @@ class Contacts:
     def n(self) -> int:
         return len(self.i)
 
+    def canonical(self) -> "Contacts":
+        """The same contacts with ``i < j`` in every row (normal and force flipped where
+        a row is swapped; walls, whose ``j`` is not a particle, are kept as they are) and
+        rows sorted by ``(i, j)``: engines list a pair in either order."""
+        swap = (self.i > self.j) & (self.j > 0)
+        i = np.where(swap, self.j, self.i)
+        j = np.where(swap, self.i, self.j)
+        sign = np.where(swap, -1.0, 1.0)[:, None]
+        order = np.lexsort((j, i))
+        return Contacts(self.step, i[order], j[order], self.point[order],
+                        (sign * self.normal)[order], self.overlap[order],
+                        (sign * self.force)[order])
+
     def subset(self, rows) -> "Contacts":
         """The contacts at the given rows (boolean mask or indices)."""
         rows = np.asarray(rows)
