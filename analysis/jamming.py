@@ -73,3 +73,21 @@ class JammingPoint(Observable):
         self._set(phi_j=float(phi_j), phi_j_err=err, slope=float(a) * self.p_scale, rows=rows,
                   n_points=len(x))
         return self
+
+
+def sample_mean(values, errors=None) -> tuple[float, float]:
+    """Mean of per-sample values (e.g. ``phi_J,s`` of independent runs) and its standard
+    error ``std / sqrt(n)`` (science.md: average ``phi_J`` over samples). With per-sample
+    ``errors`` the error is the larger of that spread and the propagated fit errors
+    ``sqrt(sum err^2) / n``."""
+    v = np.asarray(values, dtype=np.float64)
+    v = v[np.isfinite(v)]
+    if len(v) == 0:
+        raise JammingFitError("no finite samples to average")
+    spread = float(v.std(ddof=1) / np.sqrt(len(v))) if len(v) > 1 else float("nan")
+    if errors is not None:
+        e = np.asarray(errors, dtype=np.float64)
+        e = e[np.isfinite(e)]
+        prop = float(np.sqrt(np.sum(e**2)) / len(v)) if len(e) else float("nan")
+        spread = float(np.nanmax([spread, prop]))
+    return float(v.mean()), spread
