@@ -1,18 +1,23 @@
 """Contact laws: small scalar functions plugged into the one contact loop.
 
-Sign convention: ``delta > 0`` is the overlap, ``ddelta`` its rate of change
-(``> 0`` while approaching); the returned normal force magnitude is repulsive when
-positive. The force on particle ``i`` is ``-f_n n`` with ``n`` the unit normal from
-``i`` to ``j``.
+Sign convention: ``delta > 0`` is the overlap, ``ddelta`` its rate of change (``> 0``
+while approaching); a normal force magnitude is repulsive when positive. The force on
+particle ``i`` is ``-f_n n + F_t`` with ``n`` the unit normal from ``i`` to ``j``.
 
-Laws are selected by an integer id so that kernels stay monomorphic and cacheable:
+Parameters travel in one float array (indices below) so that kernels stay
+monomorphic and cacheable; laws are selected by an integer id.
 
-==============  ==  ================================================  ============
-law             id  formula                                           params
-==============  ==  ================================================  ============
-``hooke``        0  ``f_n = k_n delta + gamma_n d(delta)/dt``         ``k_n, gamma_n``
-``hertz``        1  ``f_n = k_n delta^(3/2) + gamma_n d(delta)/dt``   ``k_n, gamma_n``
-==============  ==  ================================================  ============
+==============  ==  ====================================================================
+law             id  normal force (science.md section 3)
+==============  ==  ====================================================================
+``hooke``        0  linear spring-dashpot ``f_n = k_n delta + gamma_n d(delta)/dt``
+``hertz``        1  ``f_n = k_n delta^(3/2) + gamma_n d(delta)/dt``
+``harmonic``     2  soft harmonic ``f_n = (k_n / d_ij)(delta / d_ij)``, ``d_ij = R_i + R_j``
+                    (``k_n`` is ``k_e``; energy ``k_e/2 (delta/d_ij)^2``) + damping
+==============  ==  ====================================================================
+
+Damping is absolute (force per velocity), as LAMMPS ``damping velocity`` and LIGGGHTS
+``absolute_damping on``; no force limiting.
 """
 from __future__ import annotations
 
@@ -22,30 +27,100 @@ from pysim.jit import njit
 
 HOOKE = 0
 HERTZ = 1
-LAW_IDS = {"hooke": HOOKE, "hertz": HERTZ}
+HARMONIC = 2
+LAW_IDS = {"hooke": HOOKE, "hertz": HERTZ, "harmonic": HARMONIC}
+
+# indices into the contact parameter array
+K_N, GAMMA_N, K_T, GAMMA_T, MU, F_COH, D_COH = range(7)
+N_PARAMS = 7
+
+
+def contact_params(k_n, gamma_n=0.0, k_t=0.0, gamma_t=0.0, mu=0.0, f_coh=0.0, d_coh=0.0):
+    """Pack contact parameters in the order of the index constants."""
+    p = np.zeros(N_PARAMS)
+    p[[K_N, GAMMA_N, K_T, GAMMA_T, MU, F_COH, D_COH]] = [k_n, gamma_n, k_t, gamma_t, mu, f_coh, d_coh]
+    return p
 
 
 @njit
-def normal_force(law, params, delta, ddelta):
-    """Normal force magnitude for overlap ``delta`` and overlap rate ``ddelta``.
+def normal_force(law, p, delta, ddelta, dsum):
+    """Normal force magnitude for overlap ``delta``, overlap rate ``ddelta`` and
+    contact distance ``dsum = R_i + R_j`` (see the module table)."""
+    if law == HOOKE:
+        return p[K_N] * delta + p[GAMMA_N] * ddelta
+    if law == HERTZ:
+        return p[K_N] * delta * np.sqrt(delta) + p[GAMMA_N] * ddelta
+    return p[K_N] * delta / (dsum * dsum) + p[GAMMA_N] * ddelta
 
-    ``hooke``: linear spring-dashpot ``f_n = k_n delta + gamma_n ddelta``
-    (science.md section 3); ``hertz``: ``f_n = k_n delta^(3/2) + gamma_n ddelta``.
-    Damping is absolute (force per velocity), as LAMMPS ``damping velocity`` and
-    LIGGGHTS ``absolute_damping on``. No force limiting: a contact may pull briefly
-    at the end of a damped collision, as in both peers' defaults.
+
+@njit
+def elastic_energy(law, p, delta, dsum):
+    """Elastic energy of one contact: ``k delta^2/2``, ``2/5 k delta^(5/2)`` or
+    ``k_e/2 (delta/d_ij)^2``."""
+    if law == HOOKE:
+        return 0.5 * p[K_N] * delta * delta
+    if law == HERTZ:
+        return 0.4 * p[K_N] * delta * delta * np.sqrt(delta)
+    x = delta / dsum
+    return 0.5 * p[K_N] * x * x
+
+
+@njit
+def cohesion_force(p, delta):
+    """Constant attraction ``F_c`` while the gap ``-delta`` is below ``d_c`` (science.md:
+    cohesion of the deposits); returned as a (negative) normal force."""
+    if p[F_COH] != 0.0 and delta > -p[D_COH]:
+        return -p[F_COH]
+    return 0.0
+
+
+@njit
+def tangential_force(p, fn, hist, h, n0, n1, n2, vt0, vt1, vt2, dt):
+    """Tangential spring with history and Coulomb cap (science.md section 3).
+
+    ``hist[h]`` is the tangential spring ``xi_t`` of this contact: it is first rotated
+    into the current tangent plane (keeping its length), then ``xi_t += v_t dt``,
+    ``F_t = -k_t xi_t - gamma_t v_t``; if ``|F_t| > mu |f_n|`` the force is rescaled to
+    ``mu |f_n|`` and the spring with it (``xi_t = -(F_t + gamma_t v_t)/k_t``).
+    Returns ``F_t`` (force on i).
     """
-    kn = params[0]
-    gamma_n = params[1]
-    if law == HOOKE:
-        return kn * delta + gamma_n * ddelta
-    return kn * delta * np.sqrt(delta) + gamma_n * ddelta
-
-
-@njit
-def elastic_energy(law, params, delta):
-    """Elastic energy stored in one contact: ``k delta^2 / 2`` or ``2/5 k delta^(5/2)``."""
-    kn = params[0]
-    if law == HOOKE:
-        return 0.5 * kn * delta * delta
-    return 0.4 * kn * delta * delta * np.sqrt(delta)
+    kt = p[K_T]
+    gt = p[GAMMA_T]
+    mu = p[MU]
+    x0 = hist[h, 0]
+    x1 = hist[h, 1]
+    x2 = hist[h, 2]
+    # rotate into the tangent plane, preserving the length
+    xn = x0 * n0 + x1 * n1 + x2 * n2
+    old = x0 * x0 + x1 * x1 + x2 * x2
+    x0 -= xn * n0
+    x1 -= xn * n1
+    x2 -= xn * n2
+    new = x0 * x0 + x1 * x1 + x2 * x2
+    if new > 0.0 and old > 0.0:
+        sc = np.sqrt(old / new)
+        x0 *= sc
+        x1 *= sc
+        x2 *= sc
+    x0 += vt0 * dt
+    x1 += vt1 * dt
+    x2 += vt2 * dt
+    f0 = -kt * x0 - gt * vt0
+    f1 = -kt * x1 - gt * vt1
+    f2 = -kt * x2 - gt * vt2
+    fmag = np.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
+    cap = mu * abs(fn)
+    if fmag > cap:
+        if fmag > 0.0:
+            sc = cap / fmag
+            f0 *= sc
+            f1 *= sc
+            f2 *= sc
+        if kt > 0.0:
+            x0 = -(f0 + gt * vt0) / kt
+            x1 = -(f1 + gt * vt1) / kt
+            x2 = -(f2 + gt * vt2) / kt
+    hist[h, 0] = x0
+    hist[h, 1] = x1
+    hist[h, 2] = x2
+    return f0, f1, f2

@@ -30,33 +30,22 @@ def _clamp(v, lo, hi):
 
 
 @njit
-def segment_closest(ca, ua, ha, cb, ub, hb):
-    """Parameters ``(s, t)`` of the closest points ``c_a + s u_a`` and ``c_b + t u_b``.
-
-    ``ca``, ``cb`` (3,) centres (``cb`` already the minimum image), ``ua``, ``ub`` (3,)
-    unit directions, ``ha``, ``hb`` >= 0 half-lengths. Minimises
-    ``|r + s u_a - t u_b|^2`` with ``r = c_a - c_b``: unconstrained solution of the
-    normal equations, then clamping of one parameter and re-solving for the other
-    (exact for a convex quadratic on a box). Parallel spines: centre of the overlap of
-    the projections (or the nearest ends when the projections do not overlap).
-    """
-    r0 = ca[0] - cb[0]
-    r1 = ca[1] - cb[1]
-    r2 = ca[2] - cb[2]
-    b = ua[0] * ub[0] + ua[1] * ub[1] + ua[2] * ub[2]  # u_a . u_b
-    d = ua[0] * r0 + ua[1] * r1 + ua[2] * r2  # u_a . r
-    e = ub[0] * r0 + ub[1] * r1 + ub[2] * r2  # u_b . r
-    denom = 1.0 - b * b
+def closest_params(r0, r1, r2, ua0, ua1, ua2, ha, ub0, ub1, ub2, hb):
+    """Scalar core of :func:`segment_closest`: ``r = c_a - c_b`` and the directions as
+    components (no arrays, so the contact loop allocates nothing)."""
     if ha == 0.0 and hb == 0.0:
         return 0.0, 0.0
+    b = ua0 * ub0 + ua1 * ub1 + ua2 * ub2  # u_a . u_b
+    d = ua0 * r0 + ua1 * r1 + ua2 * r2  # u_a . r
+    e = ub0 * r0 + ub1 * r1 + ub2 * r2  # u_b . r
     if ha == 0.0:
         return 0.0, _clamp(e, -hb, hb)
     if hb == 0.0:
         return _clamp(-d, -ha, ha), 0.0
+    denom = 1.0 - b * b
     if denom < PARALLEL_TOL:
-        # parallel: project b's extent onto a's axis (sign of b orients u_b along u_a)
+        # parallel: b's spine projects onto a's axis at s = -d + t sgn, t in [-hb, hb]
         sgn = 1.0 if b >= 0.0 else -1.0
-        # point c_b + t u_b sits at s = t sgn - d along a (to first order in denom)
         lo = max(-ha, -hb - d)
         hi = min(ha, hb - d)
         if lo <= hi:
@@ -65,25 +54,47 @@ def segment_closest(ca, ua, ha, cb, ub, hb):
             s = ha
         else:
             s = -ha
-        t = _clamp(sgn * (s + d), -hb, hb)
-        return s, t
+        return s, _clamp(sgn * (s + d), -hb, hb)
     # unconstrained minimum of |r + s u_a - t u_b|^2
     s = (b * e - d) / denom
     t = (e - b * d) / denom
     if -ha <= s <= ha and -hb <= t <= hb:
         return s, t
-    # clamp s, re-solve t; clamp t, re-solve s; keep the better candidate
+    # clamp s and re-solve t (then s); clamp t and re-solve s (then t); keep the better
     s1 = _clamp(s, -ha, ha)
     t1 = _clamp(b * s1 + e, -hb, hb)
     s1 = _clamp(b * t1 - d, -ha, ha)
     t2 = _clamp(t, -hb, hb)
     s2 = _clamp(b * t2 - d, -ha, ha)
     t2 = _clamp(b * s2 + e, -hb, hb)
-    q1 = _dist2(r0, r1, r2, ua, ub, s1, t1)
-    q2 = _dist2(r0, r1, r2, ua, ub, s2, t2)
+    q1 = _dist2s(r0, r1, r2, ua0, ua1, ua2, ub0, ub1, ub2, s1, t1)
+    q2 = _dist2s(r0, r1, r2, ua0, ua1, ua2, ub0, ub1, ub2, s2, t2)
     if q1 <= q2:
         return s1, t1
     return s2, t2
+
+
+@njit
+def _dist2s(r0, r1, r2, ua0, ua1, ua2, ub0, ub1, ub2, s, t):
+    x = r0 + s * ua0 - t * ub0
+    y = r1 + s * ua1 - t * ub1
+    z = r2 + s * ua2 - t * ub2
+    return x * x + y * y + z * z
+
+
+@njit
+def segment_closest(ca, ua, ha, cb, ub, hb):
+    """Parameters ``(s, t)`` of the closest points ``c_a + s u_a`` and ``c_b + t u_b``.
+
+    ``ca``, ``cb`` (3,) centres (``cb`` already the minimum image), ``ua``, ``ub`` (3,)
+    unit directions, ``ha``, ``hb`` >= 0 half-lengths. Minimises
+    ``|r + s u_a - t u_b|^2`` with ``r = c_a - c_b``: the unconstrained solution of the
+    normal equations, else clamping one parameter and re-solving for the other (exact
+    for a convex quadratic on a box). Parallel spines: centre of the overlap of the
+    projections (or the nearest ends when the projections do not overlap).
+    """
+    return closest_params(ca[0] - cb[0], ca[1] - cb[1], ca[2] - cb[2], ua[0], ua[1], ua[2],
+                          ha, ub[0], ub[1], ub[2], hb)
 
 
 @njit

@@ -141,14 +141,16 @@ def build_pairs(x, r_int, box, periodic, skin):
 
 
 @njit
-def needs_rebuild(x, x_ref, box, box_ref, periodic, r_int_max, skin):
-    """True when an unlisted pair could now be closer than its interaction range.
+def needs_rebuild(x, x_ref, box, box_ref, periodic, r_int_max, skin, growth):
+    """True when an unlisted pair could now be within its interaction range.
 
-    ``x_ref``/``box_ref`` are the positions and box at the last build. A pair that
-    was unlisted had ``r_ref > r_c + skin``; after the box is scaled by ``s`` (the
+    ``x_ref``/``box_ref`` are the positions and box at the last build, ``growth`` the
+    factor by which every interaction radius has grown since (1 without growth). A pair
+    that was unlisted had ``r_ref > r_c + skin``; after the box is scaled by ``s`` (the
     smallest per-axis ratio, at most 1) and each particle moved by at most ``d_max``
-    relative to the affinely scaled reference, ``r >= s (r_c + skin) - 2 d_max``.
-    Rebuild when that bound can fall below ``r_c`` (with ``r_c <= 2 r_int_max``).
+    relative to the affinely scaled reference, ``r >= s (r_c + skin) - 2 d_max``, while
+    its range is now ``growth r_c``. Rebuild when the bound can fall below the range
+    (with ``r_c <= 2 r_int_max``).
     """
     s = 1.0
     for k in range(3):
@@ -156,18 +158,37 @@ def needs_rebuild(x, x_ref, box, box_ref, periodic, r_int_max, skin):
             ratio = box[k] / box_ref[k]
             if ratio < s:
                 s = ratio
-    d = np.empty(3)
     dmax2 = 0.0
     for i in range(x.shape[0]):
+        d2 = 0.0
         for k in range(3):
             scale = box[k] / box_ref[k] if box_ref[k] > 0 else 1.0
-            d[k] = x[i, k] - x_ref[i, k] * scale
-        minimum_image(d, box, periodic)
-        d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+            dk = x[i, k] - x_ref[i, k] * scale
+            if periodic[k]:
+                dk -= box[k] * np.floor(dk / box[k] + 0.5)
+            d2 += dk * dk
         if d2 > dmax2:
             dmax2 = d2
     rc = 2.0 * r_int_max
-    return s * (rc + skin) - 2.0 * np.sqrt(dmax2) <= rc
+    return s * (rc + skin) - 2.0 * np.sqrt(dmax2) <= growth * rc
+
+
+@njit
+def transfer_history(old_pi, old_pj, old_hist, new_pi, new_pj):
+    """Carry per-pair history (tangential springs) from an old pair list to a new one.
+
+    Both lists are sorted by ``(i, j)``: a merge walks them once. Pairs new to the list
+    start with zero history."""
+    new = np.zeros((new_pi.shape[0], old_hist.shape[1]))
+    a = 0
+    na = old_pi.shape[0]
+    for b in range(new_pi.shape[0]):
+        while a < na and (old_pi[a] < new_pi[b] or (old_pi[a] == new_pi[b] and old_pj[a] < new_pj[b])):
+            a += 1
+        if a < na and old_pi[a] == new_pi[b] and old_pj[a] == new_pj[b]:
+            for c in range(old_hist.shape[1]):
+                new[b, c] = old_hist[a, c]
+    return new
 
 
 def all_pairs(x, r_int, box, periodic, skin):

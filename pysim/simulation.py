@@ -1,63 +1,93 @@
-"""``Simulation``: a state, a contact law and the machinery to advance them.
+"""``Simulation``: a state, a contact model, walls, and the machinery to advance them.
 
 Example (1000 spheres compressed at a true strain rate of 0.005 per axis)::
 
     from pysim import State
-    from pysim.simulation import Simulation, ContactLaw
-    sim = Simulation(state, ContactLaw("hooke", k_n=1e5, gamma_n=100.0), dt=1e-4,
-                     gamma_bg=1.0)
+    from pysim.simulation import Simulation, ContactModel
+    sim = Simulation(state, ContactModel("hooke", k_n=1e5, gamma_n=300.0, gamma_bg=1.0),
+                     dt=1e-4)
     sim.run(10_000, strain_rate=-0.005)
     print(sim.thermo())
+
+Rods drop under gravity onto a frictional floor::
+
+    sim = Simulation(state, ContactModel("hooke", 1e5, 100.0, k_t=2e4, mu=0.5),
+                     dt=1e-4, gravity=(0, 0, -10), planes=[walls.plane((0, 0, 1), (0, 0, 0))])
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from pysim.contacts import REC_COLUMNS, sphere_contacts
-from pysim.forces import LAW_IDS
-from pysim.integrators import compute_forces, verlet_chunk, wrap
+from pysim import integrators as itg
+from pysim.contacts import REC_COLUMNS, pair_forces
+from pysim.forces import LAW_IDS, contact_params
 from pysim.neighbors import build_pairs
 from pysim.state import State
+from pysim.walls import CYL_COLUMNS, PLANE_COLUMNS, wall_forces
 
 
 @dataclass(frozen=True)
-class ContactLaw:
-    """A normal contact law by name (see :mod:`pysim.forces`) and its parameters.
+class ContactModel:
+    """Contact laws and their parameters (science.md section 3).
 
-    ``k_n`` is the stiffness (force/length for ``hooke``, force/length^(3/2) for
-    ``hertz``), ``gamma_n`` the absolute normal damping (force/velocity).
+    * ``law``: ``hooke`` | ``hertz`` | ``harmonic`` normal law; ``k_n`` stiffness,
+      ``gamma_n`` absolute normal damping (force/velocity).
+    * ``k_t``, ``gamma_t``, ``mu``: tangential spring with history, damping and Coulomb
+      cap; friction is on when ``mu > 0``.
+    * ``f_coh``, ``d_coh``: constant attraction within a gap ``d_coh``.
+    * ``gamma_bg``, ``gamma_rot``: background drag on translation (force/velocity) and
+      rotation (torque/angular velocity).
+    * wall contacts use ``k_n``, ``gamma_n``, ``k_t``, ``gamma_t`` with ``mu_wall``
+      (default ``mu``) and no cohesion.
     """
 
-    name: str
+    law: str
     k_n: float
     gamma_n: float = 0.0
+    k_t: float = 0.0
+    gamma_t: float = 0.0
+    mu: float = 0.0
+    f_coh: float = 0.0
+    d_coh: float = 0.0
+    gamma_bg: float = 0.0
+    gamma_rot: float = 0.0
+    mu_wall: float | None = None
 
     def __post_init__(self):
-        if self.name not in LAW_IDS:
-            raise ValueError(f"unknown contact law {self.name!r}; valid: {sorted(LAW_IDS)}")
+        if self.law not in LAW_IDS:
+            raise ValueError(f"unknown contact law {self.law!r}; valid: {sorted(LAW_IDS)}")
         if not self.k_n > 0:
             raise ValueError(f"k_n must be > 0, got {self.k_n}")
-        if self.gamma_n < 0:
-            raise ValueError(f"gamma_n must be >= 0, got {self.gamma_n}")
+        for name in ("gamma_n", "k_t", "gamma_t", "mu", "f_coh", "d_coh", "gamma_bg", "gamma_rot"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
+        if self.f_coh > 0 and not self.d_coh > 0:
+            raise ValueError(f"cohesion f_coh = {self.f_coh} needs a range d_coh > 0")
 
     @property
     def law_id(self) -> int:
-        return LAW_IDS[self.name]
+        return LAW_IDS[self.law]
 
     @property
-    def params(self) -> np.ndarray:
-        return np.array([self.k_n, self.gamma_n], dtype=np.float64)
+    def friction(self) -> bool:
+        return self.mu > 0
+
+    def pair_params(self) -> np.ndarray:
+        return contact_params(self.k_n, self.gamma_n, self.k_t, self.gamma_t, self.mu,
+                              self.f_coh, self.d_coh)
+
+    def wall_params(self) -> np.ndarray:
+        mu = self.mu if self.mu_wall is None else self.mu_wall
+        return contact_params(self.k_n, self.gamma_n, self.k_t, self.gamma_t, mu)
 
     def contact_time(self, m_eff: float) -> float:
-        """Duration of a binary collision for the linear law (time units).
-
-        ``t_c = pi / sqrt(k/m_eff - (gamma/(2 m_eff))^2)`` (science.md, section 3).
-        """
+        """Binary contact time of the linear law, ``t_c = pi / sqrt(k/m_eff -
+        (gamma/(2 m_eff))^2)`` (science.md); the undamped value when overdamped."""
         w2 = self.k_n / m_eff - (self.gamma_n / (2.0 * m_eff)) ** 2
         if w2 <= 0:
-            return np.inf
+            w2 = self.k_n / m_eff
         return np.pi / np.sqrt(w2)
 
 
@@ -72,114 +102,251 @@ class Thermo:
     ke: float
     pe: float
     n_contacts: int
-    stress: np.ndarray  # (3, 3) contact stress tensor, tension positive
+    stress: np.ndarray = field(repr=False)  # (3, 3) contact stress, tension positive
 
     def row(self) -> tuple:
         return (self.step, self.time, self.phi, self.pressure, self.ke, self.pe,
                 self.n_contacts)
 
 
-class Simulation:
-    """Advance a :class:`State` of spheres with one contact law.
+class BlowUpError(FloatingPointError):
+    """The integration became unstable; the message says where and what to change."""
 
-    ``dt`` is the time step, ``gamma_bg`` a background drag coefficient
-    (force/velocity, ``F = -gamma_bg v``), ``skin`` the Verlet-list skin (length).
+
+class Simulation:
+    """Advance a :class:`State` with a :class:`ContactModel`, walls and gravity.
+
+    ``dt`` time step; ``gravity`` (3,) acceleration; ``planes``/``cylinders`` wall rows
+    (:mod:`pysim.walls`); ``skin`` Verlet skin (default 0.2 of the largest diameter);
+    ``max_overlap`` the overlap (fraction of the smaller diameter) that counts as a
+    blow-up.
     """
 
-    def __init__(self, state: State, law: ContactLaw, dt: float, gamma_bg: float = 0.0,
-                 skin: float | None = None):
-        if np.any(state.length > 0):
-            raise NotImplementedError(
-                "this Simulation integrates spheres (L = 0) only; spherocylinders "
-                "need the rod kernels")
+    def __init__(self, state: State, model: ContactModel, dt: float, gravity=(0.0, 0.0, 0.0),
+                 planes=(), cylinders=(), skin: float | None = None, max_overlap: float = 0.25,
+                 check_dt: bool = True):
         if not dt > 0:
             raise ValueError(f"dt must be > 0, got {dt}")
         self.state = state
-        self.law = law
+        self.model = model
         self.dt = float(dt)
-        self.gamma_bg = float(gamma_bg)
-        self.skin = float(skin if skin is not None else 0.2 * 2 * state.radius.max())
-        self._params = law.params
-        self.f = np.zeros_like(state.x)
+        self.max_overlap = float(max_overlap)
+        s = state
+        self.half = 0.5 * s.length.copy()
+        self.r_int = s.radius + self.half + 0.5 * model.d_coh
+        dmax = 2.0 * float(np.max(s.radius + self.half))
+        self.skin = float(skin if skin is not None else 0.2 * 2.0 * float(s.radius.max()))
+        self.planes = np.ascontiguousarray(np.reshape(planes, (-1, PLANE_COLUMNS)), dtype=np.float64)
+        self.cyls = np.ascontiguousarray(np.reshape(cylinders, (-1, CYL_COLUMNS)), dtype=np.float64)
+        self.n_walls = self.planes.shape[0] + self.cyls.shape[0]
+        self.wall_force = np.zeros((self.n_walls, 3))
+        self._cp = model.pair_params()
+        self._wp = model.wall_params()
+        self._wfriction = self._wp[4] > 0
+        self.whist = np.zeros((s.n * self.n_walls * 2 if self._wfriction else 0, 3))
+        g = np.asarray(gravity, dtype=np.float64).reshape(3)
+        if s.dimension == 2 and g[2] != 0:
+            raise ValueError(f"gravity {tuple(g)} has a z component in a 2-D run; use (0, -g, 0)")
+        self.sys = np.zeros(itg.SYS_SIZE)
+        self.sys[itg.GAMMA_BG] = model.gamma_bg
+        self.sys[itg.GAMMA_ROT] = model.gamma_rot
+        self.sys[itg.GX:itg.GZ + 1] = g
+        self.sys[itg.SKIN] = self.skin
+        for k in range(3):
+            if s.periodic[k] and s.box[k] < 2.0 * (dmax + model.d_coh + self.skin):
+                raise ValueError(
+                    f"box edge {k} = {s.box[k]:.4g} is below twice the interaction range "
+                    f"{dmax + model.d_coh + self.skin:.4g} (longest particle plus skin); use a "
+                    "larger box or more particles")
+        self.f = np.zeros_like(s.x)
+        self.torque = np.zeros_like(s.x)
         self.virial = np.zeros((3, 3))
         self._pe = 0.0
         self._nc = 0
+        self._nw = 0
         self.rebuilds = 0
-        self._check_dt()
-        wrap(state.x, state.box, state.periodic)
+        if check_dt:
+            self._check_dt()
+        itg.wrap(s.x, s.box, s.periodic)
+        self.pi = np.zeros(0, np.int64)
+        self.pj = np.zeros(0, np.int64)
+        self.hist = np.zeros((0, 3))
         self._rebuild()
-        self._forces()
+        self.compute_forces()
 
     # -- internals -------------------------------------------------------------------
     def _check_dt(self):
-        m = self.state.mass.min()
-        t_c = self.law.contact_time(0.5 * m)
-        if self.law.name == "hooke" and self.dt > t_c / 10:
-            raise ValueError(
-                f"time step dt = {self.dt:g} is above 1/10 of the contact time "
-                f"t_c = {t_c:.3g} of the lightest pair; use dt <= {t_c / 10:.3g} "
-                "(t_c/50 is usual)")
+        s = self.state
+        m = float(s.mass.min())
+        if self.model.law == "hooke":
+            t_c = self.model.contact_time(0.5 * m)
+            if self.dt > t_c / 10:
+                raise ValueError(
+                    f"time step dt = {self.dt:g} is above 1/10 of the contact time "
+                    f"t_c = {t_c:.3g} of the lightest pair; use dt <= {t_c / 10:.3g} "
+                    "(t_c/50 is usual)")
 
     def _rebuild(self):
+        from pysim.neighbors import transfer_history
+
         s = self.state
-        self.pi, self.pj = build_pairs(s.x, s.radius, s.box, s.periodic, self.skin)
+        pi, pj = build_pairs(s.x, self.r_int, s.box, s.periodic, self.skin)
+        self.hist = transfer_history(self.pi, self.pj, self.hist, pi, pj)
+        self.pi, self.pj = pi, pj
         self.x_ref = s.x.copy()
         self.box_ref = s.box.copy()
+        self.sys[itg.RINT_BUILD] = float(self.r_int.max())
         self.rebuilds += 1
 
-    def _forces(self):
+    def compute_forces(self):
+        """Forces, torques and virial of the current state (half-step velocities are
+        whatever ``state.v`` holds)."""
         s = self.state
-        self._pe, self._nc = compute_forces(
-            s.x, s.v, s.radius, s.box, s.periodic, self.pi, self.pj, self.law.law_id,
-            self._params, self.gamma_bg, self.f, self.virial)
+        self._pe, self._nc, self._nw = itg.forces(
+            s.x, s.v, s.omega, s.u, s.radius, self.half, s.mass, s.box, s.periodic, self.pi,
+            self.pj, self.hist, self.model.law_id, self._cp, self.model.friction, self.planes,
+            self.cyls, self._wp, self._wfriction, self.whist, self.wall_force, self.sys, s.time,
+            self.dt, self.f, self.torque, self.virial)
+
+    def _check(self, what: str):
+        s = self.state
+        bad = ~(np.all(np.isfinite(s.x), axis=1) & np.all(np.isfinite(s.v), axis=1))
+        if bad.any():
+            ids = np.flatnonzero(bad)
+            raise BlowUpError(
+                f"{what}: non-finite positions or velocities at step {s.step} for particles "
+                f"(0-based) {ids[:10].tolist()}; reduce dt (now {self.dt:g}) or the driving rate")
+        if self._nc:
+            ij, rec = self.contact_table()
+            if len(rec):
+                dmin = 2.0 * np.minimum(s.radius[ij[:, 0]], s.radius[ij[:, 1]])
+                frac = rec[:, 6] / dmin
+                worst = int(np.argmax(frac))
+                if frac[worst] > self.max_overlap:
+                    a, b = ij[worst]
+                    raise BlowUpError(
+                        f"{what}: overlap {frac[worst]:.3g} of a diameter between particles "
+                        f"(0-based) {a} and {b} at step {s.step} exceeds {self.max_overlap}; "
+                        f"reduce dt (now {self.dt:g}) or the driving rate, or stiffen k_n")
 
     # -- public API --------------------------------------------------------------------
-    def run(self, nsteps: int, strain_rate=0.0):
-        """Advance ``nsteps`` steps; ``strain_rate`` (scalar or 3 values, 1/time) scales
-        the box as ``L(t) = L(0) exp(strain_rate t)`` (negative compresses)."""
+    def run(self, nsteps: int, strain_rate=0.0, growth_rate: float = 0.0):
+        """Advance ``nsteps`` velocity-Verlet steps. ``strain_rate`` (scalar or 3 values,
+        1/time) scales periodic box edges as ``L(t) = L(0) exp(rate t)``; ``growth_rate``
+        grows every particle as ``exp(g t)`` at fixed aspect ratio."""
         if nsteps <= 0:
             return
         s = self.state
         rate = np.broadcast_to(np.asarray(strain_rate, dtype=np.float64), (3,)).copy()
         rate[~s.periodic] = 0.0
-        self.pi, self.pj, self._pe, self._nc, nreb = verlet_chunk(
-            s.x, s.v, self.f, s.radius, s.mass, s.box, s.periodic, self.pi, self.pj,
-            self.x_ref, self.box_ref, self.skin, self.law.law_id, self._params,
-            self.gamma_bg, rate, self.dt, int(nsteps), self.virial)
+        self.sys[itg.EPS_X:itg.EPS_Z + 1] = rate
+        self.sys[itg.GROWTH] = growth_rate
+        (self.pi, self.pj, self.hist, self._pe, self._nc, self._nw, nreb) = itg.verlet_chunk(
+            s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half, self.r_int,
+            s.mass, s.inertia, s.box, s.periodic, self.pi, self.pj, self.hist, self.x_ref,
+            self.box_ref, self.model.law_id, self._cp, self.model.friction, self.planes,
+            self.cyls, self._wp, self._wfriction, self.whist, self.wall_force, self.sys, s.time,
+            self.dt, int(nsteps), self.virial)
+        self.rebuilds += nreb
+        if growth_rate:
+            s.length[:] = 2.0 * self.half
+        s.step += int(nsteps)
+        s.time += nsteps * self.dt
+        self._check("velocity Verlet")
+
+    def run_overdamped(self, nsteps: int, k_d: float, kappa: float = 0.0):
+        """Advance ``nsteps`` overdamped Heun steps with substrate drag ``k_d`` while the
+        periodic box contracts as ``dL/dt = -kappa L`` (science.md, 2-D compression)."""
+        if nsteps <= 0:
+            return
+        if self.model.friction:
+            raise ValueError("the overdamped integrator has no tangential history; use mu = 0")
+        s = self.state
+        rate = np.where(s.periodic, -float(kappa), 0.0)
+        if s.dimension == 2:
+            rate[2] = 0.0
+        self.sys[itg.EPS_X:itg.EPS_Z + 1] = rate
+        self.sys[itg.K_D] = k_d
+        msize = s.mass / s.density
+        (self.pi, self.pj, self.hist, self._pe, self._nc, nreb) = itg.heun_chunk(
+            s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half, self.r_int,
+            s.mass, s.inertia, msize, s.box, s.periodic, self.pi, self.pj, self.hist, self.x_ref,
+            self.box_ref, self.model.law_id, self._cp, self.planes, self.cyls, self._wp,
+            self.wall_force, self.sys, s.time, self.dt, int(nsteps), self.virial)
+        self.sys[itg.EPS_X:itg.EPS_Z + 1] = 0.0
         self.rebuilds += nreb
         s.step += int(nsteps)
         s.time += nsteps * self.dt
-        if not np.all(np.isfinite(s.x)):
-            bad = np.flatnonzero(~np.all(np.isfinite(s.x), axis=1))
-            raise FloatingPointError(
-                f"non-finite positions at step {s.step} for particles (0-based) "
-                f"{bad[:10].tolist()}; reduce dt or the compression rate")
+        self._check("overdamped Heun")
+
+    def minimize(self, f_tol: float, max_iter: int = 100_000, dt_max: float | None = None):
+        """FIRE energy minimisation at fixed box until every force and torque is below
+        ``f_tol``. Returns ``(iterations, max |F|, max |tau|)``."""
+        s = self.state
+        dt_max = 10.0 * self.dt if dt_max is None else dt_max
+        fire = np.array([self.dt, 0.1, 0.0, dt_max, 0.02 * self.dt])
+        sys = self.sys.copy()
+        sys[itg.GAMMA_BG] = 0.0
+        sys[itg.GAMMA_ROT] = 0.0
+        sys[itg.EPS_X:itg.GROWTH + 1] = 0.0
+        s.v[:] = 0.0
+        s.omega[:] = 0.0
+        saved_sys = self.sys
+        self.sys = sys
+        self.compute_forces()
+        (self.pi, self.pj, self.hist, self._pe, self._nc, it, fmax, tmax) = itg.fire_chunk(
+            s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half, self.r_int,
+            s.mass, s.inertia, s.box, s.periodic, self.pi, self.pj, self.hist, self.x_ref,
+            self.box_ref, self.model.law_id, self._cp, self.planes, self.cyls, self._wp,
+            self.wall_force, sys, fire, int(max_iter), float(f_tol), self.virial)
+        saved_sys[itg.RINT_BUILD] = sys[itg.RINT_BUILD]
+        self.sys = saved_sys
+        s.v[:] = 0.0
+        s.omega[:] = 0.0
+        self._check("FIRE")
+        return int(it), float(fmax), float(tmax)
 
     def stress(self) -> np.ndarray:
-        """Contact stress tensor ``sigma_ab = (1/V) sum_c l^c_a F^c_b`` (tension
-        positive) of the last force evaluation."""
+        """Contact stress ``sigma_ab = (1/V) sum_c l^c_a F^c_b`` (tension positive) of the
+        last force evaluation (pair contacts; walls excluded)."""
         return self.virial / self.state.volume()
 
     def thermo(self) -> Thermo:
-        """Global quantities; pressure ``p = -tr(sigma)/3`` from contacts only."""
+        """Global quantities; pressure ``p = -tr(sigma)/d`` from pair contacts only."""
         s = self.state
         sigma = self.stress()
+        d = s.dimension
         return Thermo(step=s.step, time=s.time, phi=s.packing_fraction(),
-                      pressure=float(-np.trace(sigma) / 3.0), ke=s.kinetic_energy(),
+                      pressure=float(-np.trace(sigma[:d, :d]) / d), ke=s.kinetic_energy(),
                       pe=float(self._pe), n_contacts=int(self._nc), stress=sigma)
 
     def contact_table(self):
-        """Contacts of the current state: ``(ij (C, 2) int, rec (C, 10) float)``.
-
-        ``ij`` are 0-based particle indices; ``rec`` columns are contact point
-        (3), unit normal from i to j (3), overlap, force on i (3).
-        """
+        """Pair contacts of the current state: ``(ij (C, 2) 0-based, rec (C, 10))`` with
+        columns point (3), unit normal i->j (3), overlap, force on i (3)."""
         s = self.state
         npair = self.pi.shape[0]
         ij = np.empty((npair, 2), np.int64)
         rec = np.empty((npair, REC_COLUMNS))
         f = np.zeros_like(s.x)
+        tq = np.zeros_like(s.x)
         vir = np.zeros((3, 3))
-        _, nc = sphere_contacts(s.x, s.v, s.radius, s.box, s.periodic, self.pi, self.pj,
-                                self.law.law_id, self._params, f, vir, True, ij, rec)
+        hist = self.hist.copy()  # the table must not advance the tangential springs
+        _, nc = pair_forces(s.x, s.v, s.omega, s.u, s.radius, self.half, s.box, s.periodic,
+                            self.pi, self.pj, hist, self.model.law_id, self._cp,
+                            self.model.friction, 0.0, f, tq, vir, True, ij, rec)
         return ij[:nc].copy(), rec[:nc].copy()
+
+    def wall_contact_table(self):
+        """Wall contacts: ``(iw (C, 2): grain index, wall index; rec (C, 10))``."""
+        s = self.state
+        cap = s.n * max(self.n_walls, 1) * 2
+        iw = np.empty((cap, 2), np.int64)
+        rec = np.empty((cap, REC_COLUMNS))
+        f = np.zeros_like(s.x)
+        tq = np.zeros_like(s.x)
+        wf = np.zeros_like(self.wall_force)
+        whist = self.whist.copy()
+        nw = wall_forces(s.x, s.v, s.omega, s.u, s.radius, self.half, self.planes, self.cyls,
+                         s.time, self.model.law_id, self._wp, self._wfriction, whist, 0.0, f, tq,
+                         wf, True, iw, rec)
+        return iw[:nw].copy(), rec[:nw].copy()

@@ -17,7 +17,7 @@ import numpy as np
 from tqdm import tqdm
 
 from pysim import io
-from pysim.simulation import ContactLaw, Simulation
+from pysim.simulation import ContactModel, Simulation
 from pysim.state import State
 
 
@@ -38,12 +38,12 @@ def stage_plan(protocol: dict) -> list[tuple[str, int, float]]:
 def simulation_from_case(case: dict, x, diameters, box) -> Simulation:
     """Build the :class:`Simulation` a compression case describes."""
     c = case["contact"]
-    if c.get("friction", 0.0) > 0:
-        raise NotImplementedError("pysim does not implement friction yet (set friction: 0)")
     state = State.spheres(x, np.asarray(diameters) / 2.0, box,
                           density=case["particles"]["density"])
-    law = ContactLaw(c["law"], k_n=c["k_n"], gamma_n=c.get("gamma_n", 0.0))
-    return Simulation(state, law, dt=case["protocol"]["dt"], gamma_bg=c.get("gamma_bg", 0.0),
+    model = ContactModel(c["law"], k_n=c["k_n"], gamma_n=c.get("gamma_n", 0.0),
+                         k_t=c.get("k_t", 0.0), gamma_t=c.get("gamma_t", 0.0),
+                         mu=c.get("friction", 0.0), gamma_bg=c.get("gamma_bg", 0.0))
+    return Simulation(state, model, dt=case["protocol"]["dt"],
                       skin=0.2 * float(np.max(diameters)))
 
 

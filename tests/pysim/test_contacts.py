@@ -1,16 +1,37 @@
-"""The contact kernel against a slow NumPy reference on random dense inputs."""
+"""The contact loop against a slow NumPy reference, and neighbour-list forces against
+all-pairs forces, on random dense packings of rods of mixed length (and spheres)."""
 import numpy as np
 import pytest
 
-from pysim.contacts import REC_COLUMNS, sphere_contacts
-from pysim.forces import HERTZ, HOOKE
-from pysim.neighbors import all_pairs
+from pysim.contacts import REC_COLUMNS, pair_forces
+from pysim.forces import HARMONIC, HERTZ, HOOKE, contact_params
+from pysim.geometry import segment_closest
+from pysim.neighbors import all_pairs, build_pairs
 
 
-def reference(x, v, r, box, law, kn, gn):
-    """All-pairs NumPy implementation of the same equations."""
+def random_rods(rng, n, box, lmax, dim=3):
+    x = rng.uniform(0, 1, (n, 3)) * box
+    u = rng.normal(size=(n, 3))
+    if dim == 2:
+        x[:, 2] = 0.0
+        u[:, 2] = 0.0
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    r = rng.uniform(0.35, 0.55, n)
+    half = rng.uniform(0, lmax / 2, n)
+    half[: n // 4] = 0.0  # some spheres among the rods
+    v = rng.normal(0, 1, (n, 3))
+    w = rng.normal(0, 1, (n, 3))
+    if dim == 2:
+        v[:, 2] = 0.0
+        w[:, :2] = 0.0
+    return x, u, r, half, v, w
+
+
+def reference(x, u, r, half, v, w, box, law, p):
+    """Straightforward NumPy transcription of science.md sections 2-3 (frictionless)."""
     n = len(x)
-    f = np.zeros_like(x)
+    f = np.zeros((n, 3))
+    tq = np.zeros((n, 3))
     vir = np.zeros((3, 3))
     pe = 0.0
     nc = 0
@@ -18,48 +39,118 @@ def reference(x, v, r, box, law, kn, gn):
         for j in range(i + 1, n):
             d = x[j] - x[i]
             d -= box * np.round(d / box)
-            dist = np.linalg.norm(d)
-            delta = r[i] + r[j] - dist
+            s, t = segment_closest(np.zeros(3), u[i], half[i], d, u[j], half[j])
+            pi_, pj_ = s * u[i], d + t * u[j]
+            gap = pj_ - pi_
+            dist = np.linalg.norm(gap)
+            rs = r[i] + r[j]
+            delta = rs - dist
             if delta <= 0:
                 continue
-            nvec = d / dist
-            rate = np.dot(v[i] - v[j], nvec)
-            fn = kn * (delta if law == HOOKE else delta**1.5) + gn * rate
-            f[i] -= fn * nvec
-            f[j] += fn * nvec
-            vir += np.outer(d, -fn * nvec)
-            pe += 0.5 * kn * delta**2 if law == HOOKE else 0.4 * kn * delta**2.5
+            nv = gap / dist
+            c = pi_ + (r[i] - delta / 2) * nv
+            vrel = (v[i] + np.cross(w[i], c)) - (v[j] + np.cross(w[j], c - d))
+            rate = vrel @ nv
+            if law == HOOKE:
+                fn, e = p[0] * delta, 0.5 * p[0] * delta**2
+            elif law == HERTZ:
+                fn, e = p[0] * delta**1.5, 0.4 * p[0] * delta**2.5
+            else:
+                fn, e = p[0] * delta / rs**2, 0.5 * p[0] * (delta / rs) ** 2
+            fn += p[1] * rate
+            F = -fn * nv
+            f[i] += F
+            f[j] -= F
+            tq[i] += np.cross(c, F)
+            tq[j] += np.cross(c - d, -F)
+            vir += np.outer(d, F)
+            pe += e
             nc += 1
-    return f, vir, pe, nc
+    return f, tq, vir, pe, nc
 
 
-@pytest.mark.parametrize("law", [HOOKE, HERTZ])
-def test_kernel_matches_reference(rng, law):
-    n = 120
-    box = np.full(3, 5.0)
-    x = rng.uniform(0, 5.0, (n, 3))
-    v = rng.normal(0, 1.0, (n, 3))
-    r = rng.uniform(0.35, 0.6, n)
-    per = np.ones(3, bool)
-    pi, pj = all_pairs(x, r, box, per, 0.3)
-    f = np.zeros_like(x)
+def call(x, u, r, half, v, w, box, pi, pj, law, p, friction=False, hist=None, dt=1e-4):
+    n = len(x)
+    f = np.zeros((n, 3))
+    tq = np.zeros((n, 3))
     vir = np.zeros((3, 3))
+    hist = np.zeros((len(pi), 3)) if hist is None else hist
     rec_ij = np.empty((len(pi), 2), np.int64)
     rec = np.empty((len(pi), REC_COLUMNS))
-    params = np.array([1e4, 3.0])
-    pe, nc = sphere_contacts(x, v, r, box, per, pi, pj, law, params, f, vir, True, rec_ij, rec)
-    f_ref, vir_ref, pe_ref, nc_ref = reference(x, v, r, box, law, 1e4, 3.0)
-    assert nc == nc_ref > 50
-    np.testing.assert_allclose(f, f_ref, rtol=1e-12, atol=1e-9)
-    np.testing.assert_allclose(vir, vir_ref, rtol=1e-12, atol=1e-9)
-    assert pe == pytest.approx(pe_ref, rel=1e-12)
-    # Newton's third law: contact forces sum to zero
-    np.testing.assert_allclose(f.sum(axis=0), 0.0, atol=1e-9)
-    # the recorded table holds unit normals, positive overlaps, and forces that add up
-    rec = rec[:nc]
+    pe, nc = pair_forces(x, v, w, u, r, half, box, np.ones(3, bool), pi, pj, hist, law, p,
+                         friction, dt, f, tq, vir, True, rec_ij, rec)
+    return f, tq, vir, pe, nc, rec_ij[:nc], rec[:nc]
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("law", [HOOKE, HERTZ, HARMONIC])
+def test_kernel_matches_reference(rng, law, dim):
+    box = np.array([7.0, 7.0, 7.0 if dim == 3 else 1.0])
+    n = 60 if dim == 3 else 40
+    x, u, r, half, v, w = random_rods(rng, n, box, 3.0, dim)
+    pi, pj = all_pairs(x, r + half, box, np.ones(3, bool), 0.1)
+    p = contact_params(1e4, 3.0)
+    f, tq, vir, pe, nc, ij, rec = call(x, u, r, half, v, w, box, pi, pj, law, p)
+    f_ref, tq_ref, vir_ref, pe_ref, nc_ref = reference(x, u, r, half, v, w, box, law, p)
+    assert nc == nc_ref > 20
+    np.testing.assert_allclose(f, f_ref, rtol=1e-10, atol=1e-8)
+    np.testing.assert_allclose(tq, tq_ref, rtol=1e-10, atol=1e-8)
+    np.testing.assert_allclose(vir, vir_ref, rtol=1e-10, atol=1e-8)
+    assert pe == pytest.approx(pe_ref, rel=1e-10)
+    # Newton's third law; the table's forces add up to the particle forces
+    np.testing.assert_allclose(f.sum(axis=0), 0.0, atol=1e-8)
+    f_tab = np.zeros_like(f)
+    np.add.at(f_tab, ij[:, 0], rec[:, 7:10])
+    np.add.at(f_tab, ij[:, 1], -rec[:, 7:10])
+    np.testing.assert_allclose(f_tab, f, atol=1e-8)
     np.testing.assert_allclose(np.linalg.norm(rec[:, 3:6], axis=1), 1.0)
-    assert np.all(rec[:, 6] > 0)
-    f_tab = np.zeros_like(x)
-    np.add.at(f_tab, rec_ij[:nc, 0], rec[:, 7:10])
-    np.add.at(f_tab, rec_ij[:nc, 1], -rec[:, 7:10])
-    np.testing.assert_allclose(f_tab, f, atol=1e-9)
+
+
+@pytest.mark.parametrize("friction", [False, True])
+def test_neighbour_list_equals_all_pairs_for_mixed_rods(rng, friction):
+    box = np.full(3, 10.0)
+    x, u, r, half, v, w = random_rods(rng, 250, box, 4.0)
+    p = contact_params(1e4, 5.0, k_t=5e3, gamma_t=1.0, mu=0.5 if friction else 0.0)
+    per = np.ones(3, bool)
+    pi, pj = build_pairs(x, r + half, box, per, 0.3)
+    ai, aj = all_pairs(x, r + half, box, per, 100.0)  # every pair
+    out_nl = call(x, u, r, half, v, w, box, pi, pj, HOOKE, p, friction)
+    out_all = call(x, u, r, half, v, w, box, ai, aj, HOOKE, p, friction)
+    assert out_nl[4] == out_all[4] > 100
+    for a, b in zip(out_nl[:3], out_all[:3]):
+        np.testing.assert_array_equal(a, b)  # same pairs in the same order: bit-identical
+
+
+def test_contacts_conserve_angular_momentum(rng):
+    """Sum of torques plus sum of x cross F vanishes (non-periodic pair sums)."""
+    box = np.full(3, 50.0)
+    x, u, r, half, v, w = random_rods(rng, 80, np.full(3, 6.0), 3.0)
+    x += 20.0
+    p = contact_params(1e4, 5.0, k_t=5e3, gamma_t=1.0, mu=0.4)
+    pi, pj = all_pairs(x, r + half, box, np.ones(3, bool), 0.1)
+    f, tq, *_ = call(x, u, r, half, v, w, box, pi, pj, HOOKE, p, friction=True)
+    assert np.abs(f).max() > 1.0
+    np.testing.assert_allclose(tq.sum(axis=0) + np.cross(x, f).sum(axis=0), 0.0,
+                               atol=1e-9 * np.abs(np.cross(x, f)).sum())
+
+
+def test_tangential_force_is_capped_and_history_resets(rng):
+    """A sliding contact carries exactly mu |f_n|; separated pairs forget their spring."""
+    x = np.array([[2.0, 2.0, 2.0], [2.9, 2.0, 2.0]])
+    u = np.tile([0.0, 0.0, 1.0], (2, 1))
+    r = np.full(2, 0.5)
+    half = np.zeros(2)
+    v = np.array([[0.0, 5.0, 0.0], [0.0, 0.0, 0.0]])
+    w = np.zeros((2, 3))
+    box = np.full(3, 10.0)
+    pi, pj = np.array([0]), np.array([1])
+    p = contact_params(1e4, 0.0, k_t=1e4, gamma_t=0.0, mu=0.3)
+    hist = np.zeros((1, 3))
+    for _ in range(200):
+        f, *_ = call(x, u, r, half, v, w, box, pi, pj, HOOKE, p, True, hist, dt=1e-3)
+    fn = 1e4 * 0.1
+    assert abs(f[0, 1]) == pytest.approx(0.3 * fn, rel=1e-12)
+    assert f[0, 1] < 0  # opposes the sliding of particle 0 in +y
+    x[1, 0] = 3.5  # separate
+    call(x, u, r, half, v, w, box, pi, pj, HOOKE, p, True, hist)
+    assert np.all(hist == 0.0)

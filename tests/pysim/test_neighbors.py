@@ -33,7 +33,7 @@ def test_needs_rebuild_never_misses_a_pair(rng):
         box = box * s
         x = x * s + rng.normal(0, 0.004, x.shape)
         x %= box
-        if needs_rebuild(x, x_ref, box, box_ref, per, r.max(), skin):
+        if needs_rebuild(x, x_ref, box, box_ref, per, r.max(), skin, 1.0):
             pi, pj = build_pairs(x, r, box, per, skin)
             x_ref, box_ref = x.copy(), box.copy()
             continue
