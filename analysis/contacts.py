@@ -19,7 +19,7 @@ spine is one of its ends, the contact point projects at or beyond ``|t| = L/2``)
 freedom; for isostaticity such a contact counts as two bonds (``z_bonds``, the ``z`` of
 science.md) while contact-geometry statistics count it once (``z_tilde``).
 
-Wall contacts (rows whose ``j`` is not a particle id, :mod:`analysis.walls`) count for
+Wall contacts (rows whose ``j`` is a wall id ``<= 0``, :mod:`analysis.walls`) count for
 their grain and never become rattlers. Glued-sphere rods: :func:`glued_bodies` and
 :func:`merge_glued_contacts` turn sphere-sphere contacts into body-body contacts.
 """
@@ -106,7 +106,7 @@ def parallel_side_contacts(frame: Frame, contacts: Contacts, angle_tol: float = 
 def remove_rattlers_2d(frame: Frame, contacts: Contacts, tol: float = 1e-6) -> np.ndarray:
     """Rattler mask (N,) by the 2-D rule: 0 or 1 contacts, or 2 contacts unless both sit
     on the flat sides (not the caps) and on opposite sides of the spine; iterated. Wall
-    rows (``j`` not a particle) count and are never removed."""
+    rows (``j <= 0``) count and are never removed."""
     pp, walls = split_wall_contacts(frame, contacts)
     n = frame.n
     a = frame.index_of(pp.i)
@@ -379,8 +379,8 @@ def merge_glued_contacts(frame: Frame, contacts: Contacts, body) -> tuple[Contac
     Contacts inside one body are dropped; the contacts between two bodies become one row:
     ``i < j`` body ids, force = sum of the forces on ``i``, point = force-weighted mean of
     the points (plain mean when all forces vanish; minimum image), normal = normalised
-    sum of the normals, overlap = the largest. Wall rows (``j`` not a particle) are
-    merged per (body, wall). Returns the table and the number of sphere contacts merged
+    sum of the normals, overlap = the largest. Wall rows (``j <= 0``) are
+    merged per (body, wall id). Returns the table and the number of sphere contacts merged
     into each row.
     """
     body = np.asarray(body)

@@ -178,7 +178,7 @@ class Contacts:
 
     def canonical(self) -> "Contacts":
         """The same contacts with ``i < j`` in every row (normal and force flipped where
-        a row is swapped; walls, whose ``j`` is not a particle, are kept as they are) and
+        a row is swapped; walls, whose ``j`` is a wall id <= 0, are kept as they are) and
         rows sorted by ``(i, j)``: engines list a pair in either order."""
         swap = (self.i > self.j) & (self.j > 0)
         i = np.where(swap, self.j, self.i)

@@ -13,7 +13,7 @@ in ``V`` (tension positive). The pressure is ``p = -tr(sigma)/d``.
   :func:`principal_stresses`, :func:`major_axis_angle`;
 * stresses on a wall from the wall rows of a contact table: :class:`WallStress`.
 
-Wall rows (``j`` not a particle id, :mod:`analysis.walls`) contribute their branch
+Wall rows (``j <= 0``, :mod:`analysis.walls`) contribute their branch
 vector and force to the grain ``i`` only.
 """
 from __future__ import annotations
@@ -33,7 +33,7 @@ def particle_stress(frame: Frame, contacts: Contacts) -> np.ndarray:
     """``sigma^i`` (N, 3, 3): ``sum_c l^c_a F^c_b`` over the contacts of each particle
     (force units x length). Wall rows act on their grain ``i`` only."""
     a = frame.index_of(contacts.i)
-    wall = ~np.isin(contacts.j, frame.ids)
+    wall = contacts.j <= 0
     out = np.zeros((frame.n, 3, 3))
     la = _branch(frame, a, contacts.point)
     np.add.at(out, a, la[:, :, None] * contacts.force[:, None, :])

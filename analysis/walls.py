@@ -1,7 +1,7 @@
 """Container walls: geometric wall contacts and the wall convention of contact tables.
 
 Convention: in a :class:`analysis.frame.Contacts` table a **wall contact** is a row whose
-``j`` is not a particle id of the frame (we use negative wall ids, ``-1, -2, ...``);
+``j`` is a wall id ``<= 0`` (particle ids are ``1..N``; we use ``-1, -2, ...``);
 ``point``, ``normal`` (from the grain towards the wall), ``overlap`` and ``force`` (on
 the grain ``i``) have their usual meaning. The observables count such rows as contacts
 of ``i`` that never become rattlers (:mod:`analysis.contacts`), and add their branch
@@ -82,8 +82,9 @@ def wall_contacts(frame: Frame, walls, tolerance: float = 0.0) -> Contacts:
 
 
 def split_wall_contacts(frame: Frame, contacts: Contacts) -> tuple[Contacts, Contacts]:
-    """``(particle-particle, wall)`` rows of a table: wall rows are those whose ``j`` is
-    not a particle id of ``frame``; ``i`` must always be a particle id."""
-    frame.index_of(contacts.i)  # raises for unknown i
-    is_wall = ~np.isin(contacts.j, frame.ids)
+    """``(particle-particle, wall)`` rows of a table: wall rows are those with ``j <= 0``;
+    every ``i`` and every other ``j`` must be a particle id of ``frame`` (KeyError)."""
+    is_wall = contacts.j <= 0
+    frame.index_of(contacts.i)
+    frame.index_of(contacts.j[~is_wall])
     return contacts.subset(~is_wall), contacts.subset(is_wall)

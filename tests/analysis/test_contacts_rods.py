@@ -245,3 +245,11 @@ def test_wall_contacts_of_rods():
     cn0 = ContactNumber(c_min=2).compute(sph, both)
     assert cn0.rattlers.tolist() == [False, False, False, True]
     assert cn0.z == pytest.approx((2 * 3 + 3) / 4)
+
+
+def test_unknown_particle_ids_are_not_taken_for_walls():
+    fr = frame_of([[0, 0, 0.0], [1.0, 0, 0]], 0.5, [10.0] * 3)
+    c = Contacts(0, np.array([1]), np.array([7]), np.zeros((1, 3)), np.array([[1.0, 0, 0]]),
+                 np.zeros(1), np.zeros((1, 3)))
+    with pytest.raises(KeyError, match=r"\[7\]"):
+        ContactNumber().compute(fr, c)
