@@ -141,8 +141,10 @@ def remove_rattlers_2d(frame: Frame, contacts: Contacts, tol: float = 1e-6) -> n
 class ContactNumber(Observable):
     """Contact numbers of one frame, with and without rattlers.
 
-    Parameters: ``c_min`` threshold of ``rule="threshold"`` (3-D spheres 4; see
-    :func:`default_c_min`); ``rule`` ``"threshold"`` or ``"2d"`` (module docstring);
+    Parameters: ``rule`` ``"threshold"`` (fewer than ``c_min`` contacts), ``"2d"``
+    (science.md's 2-D rule) or ``"auto"`` (the default: ``"2d"`` for 2-D frames unless
+    ``c_min`` is given, otherwise the threshold with ``c_min``, by default
+    :func:`default_c_min`: 4 for 3-D spheres, 6 for 3-D rods);
     ``double_parallel``: count parallel side-side contacts as two bonds in ``z_bonds``
     (default: in 2-D frames only); ``tol``, ``angle_tol`` of the tip and parallel tests.
 
@@ -157,12 +159,12 @@ class ContactNumber(Observable):
     _results = ("per_particle", "z", "rattlers", "n_rattlers", "z_rattler_free", "z_tilde",
                 "z_bonds", "distribution", "distribution_rattler_free")
 
-    def __init__(self, c_min: int = 4, rule: str = "threshold", double_parallel: bool | None = None,
-                 tol: float = 1e-6, angle_tol: float = 1e-6):
-        if c_min < 0:
+    def __init__(self, c_min: int | None = None, rule: str = "auto",
+                 double_parallel: bool | None = None, tol: float = 1e-6, angle_tol: float = 1e-6):
+        if c_min is not None and c_min < 0:
             raise ValueError(f"c_min must be >= 0, got {c_min}")
-        if rule not in ("threshold", "2d"):
-            raise ValueError(f"rule must be 'threshold' or '2d', got {rule!r}")
+        if rule not in ("threshold", "2d", "auto"):
+            raise ValueError(f"rule must be 'auto', 'threshold' or '2d', got {rule!r}")
         self.c_min, self.rule, self.double_parallel = c_min, rule, double_parallel
         self.tol, self.angle_tol = tol, angle_tol
 
@@ -175,10 +177,14 @@ class ContactNumber(Observable):
         b = frame.index_of(pp.j)
         fixed = np.bincount(frame.index_of(walls.i), minlength=n)
         c = contact_counts(n, a, b) + fixed
-        if self.rule == "2d":
+        rule = self.rule
+        if rule == "auto":
+            rule = "2d" if frame.dim == 2 and self.c_min is None else "threshold"
+        if rule == "2d":
             ratt = remove_rattlers_2d(frame, contacts, self.tol)
         else:
-            ratt = remove_rattlers(n, a, b, self.c_min, fixed)
+            c_min = default_c_min(frame) if self.c_min is None else self.c_min
+            ratt = remove_rattlers(n, a, b, c_min, fixed)
         keep = ~(ratt[a] | ratt[b])
         keep_w = ~ratt[frame.index_of(walls.i)]
         n_bb = int(np.count_nonzero(~ratt))

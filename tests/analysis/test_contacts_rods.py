@@ -259,3 +259,31 @@ def test_unknown_particle_ids_are_not_taken_for_walls():
                  np.zeros(1), np.zeros((1, 3)))
     with pytest.raises(KeyError, match=r"\[7\]"):
         ContactNumber().compute(fr, c)
+
+
+def test_automatic_rattler_rule_follows_the_frame():
+    """Default ContactNumber(): 3-D spheres need 4 contacts, 3-D rods 6, 2-D frames use
+    the 2-D rule."""
+    from analysis.contacts import default_c_min
+
+    x = cubic(0, shape=(4, 4, 3), spacing=1.0) * [1, 1, 3] + [0.5, 0.5, 1.5]
+    rods = frame_of(x, 0.5, [4.0, 4.0, 9.0], axis=[0, 0, 1.0], length=2.0)
+    c = geometric_contacts(rods, 1e-9)
+    assert default_c_min(rods) == 6
+    assert ContactNumber().compute(rods, c).n_rattlers == 0
+    # remove the tip-tip contacts: 4 side contacts each are too few for a 3-D rod ...
+    side = contact_types(rods, c) == SIDE_SIDE
+    assert ContactNumber().compute(rods, c.subset(side)).n_rattlers == len(x)
+    # ... but enough for spheres
+    spheres = frame_of(cubic(4) + 0.5, 0.5, [4.0] * 3)
+    assert default_c_min(spheres) == 4
+    cs = geometric_contacts(spheres, 1e-9)
+    keep = np.abs(cs.normal[:, 2]) < 0.5  # 4 in-plane contacts each
+    assert ContactNumber().compute(spheres, cs.subset(keep)).n_rattlers == 0
+    g = cubic(0, shape=(4, 6, 1))
+    flat = frame_of(g * [3.0, 1.0, 0.0] + [1.5, 0.5, 0.0], 0.5, [12.0, 6.0, 1.0], axis=[1.0, 0, 0],
+                    length=2.0)
+    cf = geometric_contacts(flat, 1e-9)
+    only_sides = cf.subset(contact_types(flat, cf) == SIDE_SIDE)  # above and below: kept
+    assert ContactNumber().compute(flat, only_sides).n_rattlers == 0
+    assert ContactNumber(c_min=3).compute(flat, only_sides).n_rattlers == flat.n
