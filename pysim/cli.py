@@ -2,10 +2,13 @@
 
 * ``init CASE.yaml --out init.data``: the random non-overlapping start of a case
   (LAMMPS data file shared by every engine).
-* ``run CASE.yaml --out DIR [--data init.data]``: run the case's protocol and write
-  ``particles.dump``, ``contacts.dump``, ``thermo.dat`` and ``run.json`` in DIR.
+* ``run CASE.yaml --out DIR [--data init.data] [--resume]``: run the case's protocol and
+  write ``particles.dump``, ``contacts.dump``, ``thermo.dat`` and ``run.json`` in DIR;
+  ``--resume`` continues a killed run from its last checkpoint.
 
-A bad case file is a one-line error and exit status 2.
+A bad case file is a one-line error and exit status 2; a run that blows up stops with a
+one-line message naming the step and particles, exit status 3, and keeps its last
+checkpoint.
 """
 from __future__ import annotations
 
@@ -29,6 +32,10 @@ def main(argv=None) -> int:
     r.add_argument("--out", type=Path, required=True, help="output directory")
     r.add_argument("--data", type=Path, help="initial configuration (default: made from the seed)")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
+    r.add_argument("--resume", action="store_true",
+                   help="continue a killed run from DIR/checkpoint.npz (same final state)")
+    r.add_argument("--checkpoint-every", type=float, default=300.0, metavar="SECONDS",
+                   help="wall time between checkpoints (default 300)")
     args = ap.parse_args(argv)
     try:
         case = load_case(args.case)
@@ -47,6 +54,7 @@ def _run(case, args) -> int:
     import pysim
     from pysim import io
     from pysim.protocols import compress
+    from pysim.simulation import BlowUpError
     from workflows import provenance
 
     args.out.mkdir(parents=True, exist_ok=True)
@@ -54,8 +62,16 @@ def _run(case, args) -> int:
         args.data = Path(tempfile.mkdtemp()) / "init.data"
         write_initial(case, args.data)
     ids, x, d, _density, lo, box = io.read_sphere_data(args.data)
-    summary = compress.run(case, x - lo, d, box, args.out, ids=ids,
-                           progress=not args.no_progress)
+    try:
+        summary = compress.run(case, x - lo, d, box, args.out, ids=ids,
+                               progress=not args.no_progress, resume=args.resume,
+                               checkpoint_every=args.checkpoint_every)
+    except compress.ResumeError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except BlowUpError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 3
     provenance.write(args.out / "run.json",
                      provenance.record("pysim", pysim.__version__, case, status="ok", **summary))
     return 0

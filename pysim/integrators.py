@@ -177,9 +177,12 @@ def _deform(x, box, radius, half, r_int, mass, inertia, sys, dt):
 @njit
 def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia, box,
                  periodic, pi, pj, hist, x_ref, box_ref, law, cp, friction, planes, cyls, wp,
-                 wfriction, whist, wall_force, sys, t0, dt, nsteps, virial):
-    """Advance ``nsteps`` velocity-Verlet steps from time ``t0`` (see the module doc).
+                 wfriction, whist, wall_force, sys, clock, dt, nsteps, virial):
+    """Advance ``nsteps`` velocity-Verlet steps (see the module doc).
 
+    ``clock = (t_seg, s_seg, step0)``: the time after step ``k`` of this call is
+    ``t_seg + (step0 + k + 1 - s_seg) dt``, a function of the step number alone, so that
+    results do not depend on how a run is cut into calls (restarts are bit-identical).
     ``f``/``torque`` must hold the forces of the current state on entry and hold those of
     the final state on exit. Returns ``(pi, pj, hist, elastic energy, pair contacts,
     wall contacts, rebuilds)``.
@@ -189,8 +192,8 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
     nc = 0
     nw = 0
     rebuilds = 0
-    t = t0
-    for _ in range(nsteps):
+    for k in range(nsteps):
+        t = clock[0] + (clock[2] + k + 1 - clock[1]) * dt
         _kick(v, omega, u, f, torque, mass, inertia, h)
         for i in range(x.shape[0]):
             x[i, 0] += dt * v[i, 0]
@@ -198,7 +201,6 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
             x[i, 2] += dt * v[i, 2]
         _rotate_free(q, u, omega, inertia, dt)
         wrap(x, box, periodic)
-        t += dt
         pi, pj, hist, rebuilt = maybe_rebuild(x, box, periodic, r_int, sys, pi, pj, hist,
                                               x_ref, box_ref)
         if rebuilt:
@@ -236,7 +238,7 @@ def _mobility_step(x0, q0, f, torque, mass, inertia, msize, kd, u, x, q, v, omeg
 @njit
 def heun_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia, msize, box,
                periodic, pi, pj, hist, x_ref, box_ref, law, cp, planes, cyls, wp, wall_force,
-               sys, t0, dt, nsteps, virial):
+               sys, clock, dt, nsteps, virial):
     """Advance ``nsteps`` overdamped Heun steps (see the module doc). ``msize`` is the
     particle area (2-D) or volume (3-D); ``sys[K_D]`` the substrate drag ``k_d``; the box
     contracts at ``sys[EPS_*]`` (``-kappa``). ``v``/``omega`` return the last mobility
@@ -255,8 +257,8 @@ def heun_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
     pe = 0.0
     nc = 0
     rebuilds = 0
-    t = t0
-    for _ in range(nsteps):
+    for kk in range(nsteps):
+        t = clock[0] + (clock[2] + kk - clock[1]) * dt
         x0[:, :] = x
         q0[:, :] = q
         f0[:, :] = f
@@ -291,7 +293,7 @@ def heun_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
                         u[i, 0], u[i, 1], u[i, 2], ip, ip, dt)
             axis_of(q, i, u)
         wrap(x, box, periodic)
-        t += dt
+        t = clock[0] + (clock[2] + kk + 1 - clock[1]) * dt
         pi, pj, hist, rebuilt = maybe_rebuild(x, box, periodic, r_int, sys, pi, pj, hist,
                                               x_ref, box_ref)
         if rebuilt:

@@ -129,7 +129,8 @@ class Simulation:
             raise ValueError(f"dt must be > 0, got {dt}")
         self.state = state
         self.model = model
-        self.dt = float(dt)
+        self._dt = float(dt)
+        self._t_seg, self._s_seg = float(state.time), int(state.step)
         self.max_overlap = float(max_overlap)
         s = state
         self.half = 0.5 * s.length.copy()
@@ -173,6 +174,28 @@ class Simulation:
         self.hist = np.zeros((0, 3))
         self._rebuild()
         self.compute_forces()
+
+    # -- time --------------------------------------------------------------------------
+    @property
+    def dt(self) -> float:
+        """Time step; changing it starts a new segment of the clock (time stays a function
+        of the step number within a segment)."""
+        return self._dt
+
+    @dt.setter
+    def dt(self, value: float):
+        if not value > 0:
+            raise ValueError(f"dt must be > 0, got {value}")
+        self._t_seg, self._s_seg = float(self.state.time), int(self.state.step)
+        self._dt = float(value)
+
+    def _clock(self) -> np.ndarray:
+        return np.array([self._t_seg, float(self._s_seg), float(self.state.step)])
+
+    def _advance_clock(self, nsteps: int):
+        s = self.state
+        s.step += int(nsteps)
+        s.time = self._t_seg + (s.step - self._s_seg) * self._dt
 
     # -- internals -------------------------------------------------------------------
     def _check_dt(self):
@@ -245,13 +268,12 @@ class Simulation:
             s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half, self.r_int,
             s.mass, s.inertia, s.box, s.periodic, self.pi, self.pj, self.hist, self.x_ref,
             self.box_ref, self.model.law_id, self._cp, self.model.friction, self.planes,
-            self.cyls, self._wp, self._wfriction, self.whist, self.wall_force, self.sys, s.time,
-            self.dt, int(nsteps), self.virial)
+            self.cyls, self._wp, self._wfriction, self.whist, self.wall_force, self.sys,
+            self._clock(), self.dt, int(nsteps), self.virial)
         self.rebuilds += nreb
         if growth_rate:
             s.length[:] = 2.0 * self.half
-        s.step += int(nsteps)
-        s.time += nsteps * self.dt
+        self._advance_clock(nsteps)
         self._check("velocity Verlet")
 
     def run_overdamped(self, nsteps: int, k_d: float, kappa: float = 0.0):
@@ -272,11 +294,10 @@ class Simulation:
             s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half, self.r_int,
             s.mass, s.inertia, msize, s.box, s.periodic, self.pi, self.pj, self.hist, self.x_ref,
             self.box_ref, self.model.law_id, self._cp, self.planes, self.cyls, self._wp,
-            self.wall_force, self.sys, s.time, self.dt, int(nsteps), self.virial)
+            self.wall_force, self.sys, self._clock(), self.dt, int(nsteps), self.virial)
         self.sys[itg.EPS_X:itg.EPS_Z + 1] = 0.0
         self.rebuilds += nreb
-        s.step += int(nsteps)
-        s.time += nsteps * self.dt
+        self._advance_clock(nsteps)
         self._check("overdamped Heun")
 
     def minimize(self, f_tol: float, max_iter: int = 100_000, dt_max: float | None = None):

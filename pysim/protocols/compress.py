@@ -6,19 +6,28 @@ pressure reaches ``pressure_final``). A stage from ``phi_a`` to ``phi_b`` lasts
 ``round(ln(phi_b/phi_a) / (3 rate dt))`` steps, the same count as the decks.
 Thermo rows are written at multiples of ``thermo_every`` steps, dump frames at
 multiples of ``dump_every``, as LAMMPS does.
+
+Long runs checkpoint every ``checkpoint_every`` seconds of wall time
+(``checkpoint.npz`` next to the outputs, which grow as ``*.part`` files until the run
+ends); ``resume=True`` continues from the last checkpoint and gives the same files and
+final state, bit for bit, as an uninterrupted run.
 """
 from __future__ import annotations
 
 import math
+import os
 import time
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
-from pysim import io
-from pysim.simulation import ContactModel, Simulation
+from pysim import checkpoint, io
+from pysim.simulation import BlowUpError, ContactModel, Simulation
 from pysim.state import State
+
+OUTPUTS = ("particles.dump", "contacts.dump", "thermo.dat")
+CHECKPOINT = "checkpoint.npz"
 
 
 def stage_plan(protocol: dict) -> list[tuple[str, int, float]]:
@@ -47,14 +56,40 @@ def simulation_from_case(case: dict, x, diameters, box) -> Simulation:
                       skin=0.2 * float(np.max(diameters)))
 
 
-def run(case: dict, x, diameters, box, out_dir, ids=None, progress: bool = True) -> dict:
+class ResumeError(RuntimeError):
+    """A run cannot be resumed (no checkpoint, or its files do not match it)."""
+
+
+def run(case: dict, x, diameters, box, out_dir, ids=None, progress: bool = True,
+        resume: bool = False, checkpoint_every: float = 300.0) -> dict:
     """Run the compression protocol and write the common output files to ``out_dir``.
 
     Returns a summary: steps, wall time, final thermo row, particle-steps per second.
+    Raises :class:`pysim.simulation.BlowUpError` (keeping the last checkpoint and the
+    partial files) when the integration becomes unstable.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    sim = simulation_from_case(case, x, diameters, box)
+    ckpt = out / CHECKPOINT
+    paths = {k: out / k for k in OUTPUTS}
+    if resume:
+        if not ckpt.exists():
+            raise ResumeError(f"{ckpt}: no checkpoint to resume from; run without --resume")
+        sim, extra = checkpoint.load(ckpt)
+        for name, size in extra["files"].items():
+            part = io.part_path(paths[name])
+            if not part.exists() or part.stat().st_size < size:
+                raise ResumeError(f"{part}: missing or shorter ({part.stat().st_size if part.exists() else 0} "
+                                  f"bytes) than the checkpoint records ({size}); rerun from the start")
+            with open(part, "r+b") as fh:
+                fh.truncate(size)
+        fh = {k: open(io.part_path(p), "a") for k, p in paths.items()}
+    else:
+        sim = simulation_from_case(case, x, diameters, box)
+        fh = {k: open(io.part_path(p), "w") for k, p in paths.items()}
+        fh["thermo.dat"].write(io.thermo_header())
+        if ckpt.exists():
+            ckpt.unlink()
     s = sim.state
     ids = np.arange(1, s.n + 1) if ids is None else np.asarray(ids)
     types = np.ones(s.n, dtype=np.int64)
@@ -63,11 +98,8 @@ def run(case: dict, x, diameters, box, out_dir, ids=None, progress: bool = True)
     dump_every = int(outp.get("dump_every", 4000))
     p_final = case["protocol"].get("pressure_final", math.inf)
     stages = stage_plan(case["protocol"])
-    total = sum(n for _, n, _ in stages)
-
-    paths = {k: out / f"{k}" for k in ("particles.dump", "contacts.dump", "thermo.dat")}
-    fh = {k: open(io.part_path(p), "w") for k, p in paths.items()}
-    fh["thermo.dat"].write(io.thermo_header())
+    ends = np.cumsum([n for _, n, _ in stages])
+    total = int(ends[-1])
 
     def dump():
         io.write_particles_frame(fh["particles.dump"], s.step, s.box, s.periodic, ids, types,
@@ -75,16 +107,26 @@ def run(case: dict, x, diameters, box, out_dir, ids=None, progress: bool = True)
         ij, rec = sim.contact_table()
         io.write_contacts_frame(fh["contacts.dump"], s.step, s.box, s.periodic, ids[ij], rec)
 
+    def save_checkpoint():
+        sizes = {}
+        for k, f in fh.items():
+            f.flush()
+            os.fsync(f.fileno())
+            sizes[k] = f.tell()
+        checkpoint.save(sim, ckpt, extra={"files": sizes})
+
     t0 = time.perf_counter()
-    bar = tqdm(total=total, disable=not progress, unit="step", mininterval=1.0,
+    last_ckpt = t0
+    steps_at_start = s.step
+    bar = tqdm(total=total, initial=s.step, disable=not progress, unit="step", mininterval=1.0,
                desc="pysim compress", dynamic_ncols=True)
     try:
-        dump()
-        stopped = False
-        for name, nsteps, rate in stages:
-            end = s.step + nsteps
+        if not resume:
+            dump()
+            save_checkpoint()
+        for (name, _, rate), end in zip(stages, ends):
             while s.step < end:
-                nxt = min(end, (s.step // thermo_every + 1) * thermo_every,
+                nxt = min(int(end), (s.step // thermo_every + 1) * thermo_every,
                           (s.step // dump_every + 1) * dump_every)
                 before = s.step
                 sim.run(nxt - s.step, strain_rate=rate)
@@ -97,18 +139,29 @@ def run(case: dict, x, diameters, box, out_dir, ids=None, progress: bool = True)
                 if s.step % dump_every == 0:
                     dump()
                 if name == "slow" and th.pressure >= p_final:
-                    stopped = True
                     break
-            if stopped:
-                break
-    finally:
+                if time.perf_counter() - last_ckpt > checkpoint_every:
+                    save_checkpoint()
+                    last_ckpt = time.perf_counter()
+            else:
+                continue
+            break  # pressure_final reached
+    except BlowUpError as exc:
         bar.close()
         for f in fh.values():
             f.close()
+        raise BlowUpError(f"{exc}; the last good checkpoint is {ckpt}") from None
+    finally:
+        bar.close()
+        for f in fh.values():
+            if not f.closed:
+                f.close()
     wall = time.perf_counter() - t0
     for p in paths.values():
         io.finalize(p)
+    ckpt.unlink(missing_ok=True)
     th = sim.thermo()
+    done = s.step - steps_at_start
     return {"steps": s.step, "wall_seconds": wall, "final": dict(zip(io.THERMO_COLUMNS, th.row())),
-            "particle_steps_per_second": s.n * s.step / wall if wall > 0 else float("nan"),
-            "neighbor_rebuilds": sim.rebuilds}
+            "particle_steps_per_second": s.n * done / wall if wall > 0 else float("nan"),
+            "neighbor_rebuilds": sim.rebuilds, "resumed": bool(resume)}

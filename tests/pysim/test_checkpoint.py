@@ -1,0 +1,116 @@
+"""Checkpoints: a resumed run is bit-identical to an uninterrupted one."""
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import yaml
+
+from pysim import checkpoint
+from pysim.initial import write_initial
+from pysim.simulation import ContactModel, Simulation
+from pysim.state import State
+from pysim.walls import cylinder, plane
+from workflows.case import validate_case
+
+
+def rods_in_a_tapped_cylinder():
+    rng = np.random.default_rng(3)
+    g = np.array([3.7, 6.3])
+    x = np.array([[a, b, 1.8 + 2.6 * k] for k in range(10) for a in g for b in g])
+    n = len(x)
+    ang = rng.normal(size=(n, 3))
+    ang /= np.linalg.norm(ang, axis=1, keepdims=True)
+    v = np.zeros((n, 3))
+    v[:, 2] = -6.0
+    st = State.create(x, 0.5, 1.5, np.array([10.0, 10.0, 40.0]), axis=ang, v=v,
+                      periodic=(False, False, False))
+    model = ContactModel("hooke", 1e5, 40.0, k_t=3e4, gamma_t=5.0, mu=0.5, gamma_bg=0.05)
+    return Simulation(st, model, dt=5e-5, gravity=(0, 0, -10),
+                      planes=[plane((0, 0, 1), (0, 0, 0), amp=0.05, omega_w=2 * np.pi * 30)],
+                      cylinders=[cylinder(5.0, 5.0, 4.5)])
+
+
+def assert_same(a: Simulation, b: Simulation):
+    for k in ("x", "v", "q", "omega", "radius", "mass"):
+        np.testing.assert_array_equal(getattr(a.state, k), getattr(b.state, k), err_msg=k)
+    for k in ("f", "torque", "virial", "hist", "whist", "wall_force"):
+        np.testing.assert_array_equal(getattr(a, k), getattr(b, k), err_msg=k)
+    assert (a.state.step, a.state.time) == (b.state.step, b.state.time)
+
+
+def test_resumed_simulation_is_bit_identical(tmp_path):
+    a = rods_in_a_tapped_cylinder()
+    touching = 0
+    for _ in range(180):
+        a.run(100)
+        touching += a.thermo().n_contacts + a._nw
+    b = rods_in_a_tapped_cylinder()
+    b.run(3000)
+    checkpoint.save(b, tmp_path / "c.npz", extra={"note": "x"})
+    b.run(15000)  # the original continues ...
+    c, extra = checkpoint.load(tmp_path / "c.npz")  # ... and so does its restart
+    assert extra == {"note": "x"}
+    c.run(7000)
+    c.run(8000)
+    assert touching > 50 and np.abs(a.whist).max() > 0 and np.abs(a.hist).max() > 0
+    assert_same(a, b)
+    assert_same(a, c)
+
+
+TINY = {
+    "particles": {"n": 200, "diameter": {"distribution": "mono", "mean": 1.0}},
+    "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 300.0, "gamma_bg": 1.0},
+    "protocol": {"name": "compress", "phi_init": 0.3, "phi_fast": 0.55, "rate_fast": 0.2,
+                 "rate": 0.02, "phi_final": 0.68, "dt": 1e-4},
+    "output": {"thermo_every": 500, "dump_every": 2000},
+    "seed": 9,
+}
+
+
+def pysim_run(case_path, data, out, *extra):
+    return [sys.executable, "-m", "pysim", "run", str(case_path), "--data", str(data), "--out",
+            str(out), "--no-progress", *extra]
+
+
+def test_kill_9_and_resume_gives_identical_files(tmp_path):
+    case = validate_case(TINY)
+    cp = tmp_path / "case.yaml"
+    cp.write_text(yaml.safe_dump(case))
+    write_initial(case, tmp_path / "init.data")
+    ref = subprocess.run(pysim_run(cp, tmp_path / "init.data", tmp_path / "ref"),
+                         capture_output=True, text=True)
+    assert ref.returncode == 0, ref.stderr
+    out = tmp_path / "killed"
+    proc = subprocess.Popen(pysim_run(cp, tmp_path / "init.data", out, "--checkpoint-every", "0"),
+                            stderr=subprocess.PIPE)
+    thermo_part = out / "thermo.dat.part"
+    deadline = time.time() + 120
+    while time.time() < deadline:
+        if (out / "checkpoint.npz").exists() and thermo_part.exists() \
+                and thermo_part.read_text().count("\n") > 40:
+            break
+        time.sleep(0.05)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert not (out / "thermo.dat").exists(), "the run finished before it could be killed"
+    again = subprocess.run(pysim_run(cp, tmp_path / "init.data", out, "--resume"),
+                           capture_output=True, text=True)
+    assert again.returncode == 0, again.stderr
+    for name in ("particles.dump", "contacts.dump", "thermo.dat"):
+        assert (out / name).read_bytes() == (tmp_path / "ref" / name).read_bytes(), name
+    assert not (out / "checkpoint.npz").exists()
+    assert not list(out.glob("*.part"))
+
+
+def test_resume_without_checkpoint_is_a_clear_error(tmp_path):
+    case = validate_case(TINY)
+    cp = tmp_path / "case.yaml"
+    cp.write_text(yaml.safe_dump(case))
+    write_initial(case, tmp_path / "init.data")
+    r = subprocess.run(pysim_run(cp, tmp_path / "init.data", tmp_path / "out", "--resume"),
+                       capture_output=True, text=True)
+    assert r.returncode == 2
+    assert "no checkpoint to resume from" in r.stderr and "Traceback" not in r.stderr
