@@ -159,3 +159,106 @@ def read_sphere_data(path):
     a = np.array(atoms)
     a = a[np.argsort(a[:, 0])]
     return a[:, 0].astype(np.int64), a[:, 4:7].copy(), a[:, 2].copy(), a[:, 3].copy(), lo, hi - lo
+
+
+def write_rod_data(path, x, axis, radius, length, box, density, dimension=3,
+                   title="rodpack initial configuration"):
+    """Write spherocylinders as a LAMMPS data file for ``atom_style ellipsoid``.
+
+    Each rod is an atom with an ``Ellipsoids`` entry ``id D D L+D qw qx qy qz``: the long
+    (body z) axis is the spine, the quaternion rotates body into lab axes (the pysim
+    convention), so LAMMPS, OVITO and pysim read the same orientations. The atom
+    ``density`` column holds the material density (engines derive masses from their own
+    representation of the rod). 2-D files have ``z = 0`` and ``zlo zhi = -0.5 0.5``.
+    """
+    from pysim.rotation import quaternions_from_axes
+
+    x = np.asarray(x, dtype=np.float64)
+    n = len(x)
+    radius = np.broadcast_to(np.asarray(radius, dtype=np.float64), (n,))
+    length = np.broadcast_to(np.asarray(length, dtype=np.float64), (n,))
+    q = quaternions_from_axes(axis)
+    lines = [f"# {title}", "", f"{n} atoms", "1 atom types", f"{n} ellipsoids", ""]
+    for k, ax in enumerate("xyz"):
+        if k == 2 and dimension == 2:
+            lines.append("-0.5 0.5 zlo zhi")
+        else:
+            lines.append(f"0.0 {box[k]:.16g} {ax}lo {ax}hi")
+    lines += ["", "Atoms # ellipsoid", ""]
+    lines += [f"{i + 1} 1 1 {density:.16g} {x[i, 0]:.16g} {x[i, 1]:.16g} {x[i, 2]:.16g}"
+              for i in range(n)]
+    lines += ["", "Ellipsoids", ""]
+    lines += [f"{i + 1} {2 * radius[i]:.16g} {2 * radius[i]:.16g} {length[i] + 2 * radius[i]:.16g} "
+              f"{q[i, 0]:.16g} {q[i, 1]:.16g} {q[i, 2]:.16g} {q[i, 3]:.16g}" for i in range(n)]
+    atomic_write_text(path, "\n".join(lines) + "\n")
+
+
+def _sections(path):
+    """Header values and named sections (lists of number rows) of a LAMMPS data file."""
+    header = {}
+    sections = {}
+    current = None
+    with open(path) as fh:
+        for lineno, raw in enumerate(fh, 1):
+            line = raw.split("#")[0].strip()
+            if not line:
+                continue
+            word = line.split()[0]
+            if word[0].isalpha():
+                current = word
+                sections[current] = []
+                continue
+            if current is None:
+                parts = line.split()
+                key = " ".join(p for p in parts if not _is_number(p))
+                header[key] = [float(p) for p in parts if _is_number(p)]
+            else:
+                try:
+                    sections[current].append([float(v) for v in line.split()])
+                except ValueError:
+                    raise ValueError(f"{path}:{lineno}: not a number in {raw.strip()!r}") from None
+    return header, sections
+
+
+def _is_number(s):
+    try:
+        float(s)
+        return True
+    except ValueError:
+        return False
+
+
+def read_particle_data(path) -> dict:
+    """Read an initial configuration written by :func:`write_sphere_data` (spheres) or
+    :func:`write_rod_data` (spherocylinders).
+
+    Returns a dict of arrays sorted by id: ``ids``, ``x`` (N, 3), ``radius``, ``length``,
+    ``axis`` (N, 3), ``density`` (N,), and ``box_lo``, ``box`` (3,).
+    """
+    from pysim.rotation import axes
+
+    header, sections = _sections(path)
+    n = int(header.get("atoms", [0])[0])
+    atoms = np.array(sections.get("Atoms", []))
+    if len(atoms) != n or n == 0:
+        raise ValueError(f"{path}: header says {n} atoms, found {len(atoms)} atom lines")
+    lo = np.array([header[f"{a}lo {a}hi"][0] for a in "xyz"])
+    hi = np.array([header[f"{a}lo {a}hi"][1] for a in "xyz"])
+    atoms = atoms[np.argsort(atoms[:, 0])]
+    ids = atoms[:, 0].astype(np.int64)
+    if "Ellipsoids" in sections:
+        ell = np.array(sections["Ellipsoids"])
+        ell = ell[np.argsort(ell[:, 0])]
+        if len(ell) != n or not np.array_equal(ell[:, 0].astype(np.int64), ids):
+            raise ValueError(f"{path}: the Ellipsoids section must list every atom once")
+        radius = ell[:, 1] / 2.0
+        length = ell[:, 3] - ell[:, 1]
+        q = np.ascontiguousarray(ell[:, 4:8])
+        q /= np.linalg.norm(q, axis=1, keepdims=True)
+        u = np.empty((n, 3))
+        axes(q, u)
+        return {"ids": ids, "x": atoms[:, 4:7].copy(), "radius": radius, "length": length,
+                "axis": u, "density": atoms[:, 3].copy(), "box_lo": lo, "box": hi - lo}
+    return {"ids": ids, "x": atoms[:, 4:7].copy(), "radius": atoms[:, 2] / 2.0,
+            "length": np.zeros(n), "axis": np.tile([0.0, 0.0, 1.0], (n, 1)),
+            "density": atoms[:, 3].copy(), "box_lo": lo, "box": hi - lo}

@@ -137,6 +137,8 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     if "Lost atoms" in text:
         raise EngineError(f"{engine} lost atoms; log: {screen_path}")
     particles = work / "particles.dump"
+    if engine == "liggghts":
+        restore_box_precision(particles, work / "box.dat", data)
     convert = convert_lammps_contacts if engine == "lammps" else convert_liggghts_contacts
     stats = convert(work / "contacts.native", particles, work / "contacts.dump")
     for name in ("particles.dump", "contacts.dump", "thermo.dat"):
@@ -147,6 +149,40 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
             "wall_seconds": wall, "steps": steps,
             "particle_steps_per_second": n * steps / wall if wall > 0 else float("nan"),
             "contacts_dropped": stats["dropped"], "status": "ok"}
+
+
+def restore_box_precision(particles: Path, box_file: Path, data: Path):
+    """Rewrite the box bounds of a LIGGGHTS particle dump at full precision.
+
+    LIGGGHTS prints dump box bounds with 6 significant digits; its deck prints them in
+    full to ``box.dat`` at the dump steps (``fix print`` runs from the first dump
+    interval on), and the data file gives the box at step 0.
+    """
+    from pysim.io import read_particle_data
+
+    bounds = {}
+    init = read_particle_data(data)
+    bounds[0] = np.column_stack([init["box_lo"], init["box_lo"] + init["box"]])
+    with open(box_file) as fh:
+        for line in fh:
+            if line.strip() and not line.startswith("#"):
+                v = line.split()
+                bounds[int(float(v[0]))] = np.array(v[1:7], dtype=np.float64).reshape(3, 2)
+    lines = particles.read_text().splitlines()
+    k = 0
+    while k < len(lines):
+        if lines[k].startswith("ITEM: TIMESTEP"):
+            step = int(lines[k + 1])
+            if step not in bounds:
+                raise EngineError(f"{box_file}: no box bounds for dump step {step}")
+            for a in range(3):
+                lines[k + 5 + a] = f"{bounds[step][a, 0]:.16g} {bounds[step][a, 1]:.16g}"
+            k += 9 + int(lines[k + 3])
+        else:
+            k += 1
+    tmp = io.part_path(particles)
+    tmp.write_text("\n".join(lines) + "\n")
+    os.replace(tmp, particles)
 
 
 def _last_step(thermo: Path) -> int:
