@@ -53,7 +53,8 @@ def _run(case, args) -> int:
 
     import pysim
     from pysim import io
-    from pysim.protocols import compress
+    from pysim.protocols import compress, growth
+    from pysim.protocols.output import ResumeError
     from pysim.simulation import BlowUpError
     from workflows import provenance
 
@@ -61,12 +62,16 @@ def _run(case, args) -> int:
     if args.data is None:
         args.data = Path(tempfile.mkdtemp()) / "init.data"
         write_initial(case, args.data)
-    ids, x, d, _density, lo, box = io.read_sphere_data(args.data)
+    init = io.read_particle_data(args.data)
+    if len(init["ids"]) != case["particles"]["n"]:
+        print(f"error: {args.data} holds {len(init['ids'])} particles, the case says "
+              f"particles.n = {case['particles']['n']}", file=sys.stderr)
+        return 2
+    driver = {"compress": compress, "growth": growth}[case["protocol"]["name"]]
     try:
-        summary = compress.run(case, x - lo, d, box, args.out, ids=ids,
-                               progress=not args.no_progress, resume=args.resume,
-                               checkpoint_every=args.checkpoint_every)
-    except compress.ResumeError as exc:
+        summary = driver.run(case, init, args.out, progress=not args.no_progress,
+                             resume=args.resume, checkpoint_every=args.checkpoint_every)
+    except ResumeError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except BlowUpError as exc:

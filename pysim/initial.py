@@ -16,11 +16,17 @@ from pysim.jit import njit
 PHI_RSA_MAX = 0.35
 
 
-def sample_diameters(n: int, distribution: str, mean: float, sigma: float, rng) -> np.ndarray:
-    """Particle diameters: ``mono`` (all equal ``mean``) or ``lognormal`` with mean
-    ``mean`` and standard deviation ``sigma * mean`` (length units)."""
+def sample_diameters(n: int, distribution: str, mean: float, sigma: float, rng,
+                     ratio: float = 1.4, fraction_big: float = 0.5) -> np.ndarray:
+    """Particle diameters: ``mono`` (all equal ``mean``), ``lognormal`` with mean
+    ``mean`` and standard deviation ``sigma * mean``, or ``bidisperse`` (a fraction
+    ``fraction_big`` of the particles, rounded, with diameter ``ratio * mean``)."""
     if distribution == "mono":
         return np.full(n, float(mean))
+    if distribution == "bidisperse":
+        d = np.full(n, float(mean))
+        d[: int(round(fraction_big * n))] = ratio * mean
+        return d
     if distribution == "lognormal":
         if sigma <= 0:
             return np.full(n, float(mean))
@@ -239,17 +245,26 @@ def random_spheres(diameters: np.ndarray, phi: float, seed: int, max_attempts: i
 def write_initial(case: dict, path) -> None:
     """Write the random non-overlapping start of a case as a LAMMPS data file.
 
-    Diameters are drawn with ``numpy.random.default_rng(seed)``, positions by RSA
-    seeded with the same ``seed``, at ``protocol.phi_init``.
+    Diameters are drawn with ``numpy.random.default_rng(seed)``, positions (and axes) by
+    RSA seeded with the same ``seed``, at ``protocol.phi_init``. 3-D spheres go to an
+    ``atom_style sphere`` file, everything else (rods, 2-D) to an ``atom_style
+    ellipsoid`` file (:func:`pysim.io.write_rod_data`).
     """
-    from pysim.io import write_sphere_data
+    from pysim.io import write_rod_data, write_sphere_data
 
     p = case["particles"]
     seed = int(case["seed"])
     rng = np.random.default_rng(seed)
-    d = sample_diameters(p["n"], p["diameter"].get("distribution", "mono"),
-                         p["diameter"]["mean"], p["diameter"].get("sigma", 0.0), rng)
+    dd = p["diameter"]
+    d = sample_diameters(p["n"], dd.get("distribution", "mono"), dd["mean"], dd.get("sigma", 0.0),
+                         rng, dd.get("ratio", 1.4), dd.get("fraction_big", 0.5))
     phi = case["protocol"]["phi_init"]
-    x, d, box = random_spheres(d, phi, seed)
-    write_sphere_data(path, x, d, box, p.get("density", 1.0),
-                      title=f"rodpack random start, seed {seed}, phi {phi}")
+    dim = p.get("dimension", 3)
+    alpha = p.get("aspect_ratio", 0.0)
+    title = f"rodpack random start, seed {seed}, phi {phi}"
+    if dim == 3 and alpha == 0:
+        x, d, box = random_spheres(d, phi, seed)
+        write_sphere_data(path, x, d, box, p.get("density", 1.0), title=title)
+        return
+    x, u, r, length, box = random_spherocylinders(d / 2.0, alpha * d, phi, seed, dimension=dim)
+    write_rod_data(path, x, u, r, length, box, p.get("density", 1.0), dimension=dim, title=title)

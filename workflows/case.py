@@ -24,6 +24,8 @@ SCHEMA_DIR = Path(__file__).resolve().parent / "schemas"
 ENGINES = ("pysim", "lammps", "liggghts")
 #: RSA saturates near 0.38 for spheres; insertion is refused above this
 PHI_INSERT_MAX = 0.35
+#: random sequential addition of disks saturates near 0.547
+PHI_INSERT_MAX_2D = 0.5
 #: time step must stay below this fraction of the binary contact time
 DT_MAX_FRACTION = 0.1
 #: column names of case parameters in tidy tables (science.md symbols)
@@ -176,11 +178,40 @@ def contact_time(k_n: float, gamma_n: float, m_eff: float) -> float:
 
 
 def validate_case(case: dict, source: str = "case", prefix=()) -> dict:
-    """Validate a case (schema, then physical consistency); return it with defaults."""
+    """Validate a case (schema, the protocol's own schema, then physical consistency);
+    return it with defaults filled in."""
     case = coerce_numbers(copy.deepcopy(case))
-    _raise_first(_Validator(_load_schema("case.schema.yaml")).iter_errors(case), source, prefix)
+    schema = _load_schema("case.schema.yaml")
+    _raise_first(_Validator(schema).iter_errors(case), source, prefix)
+    name = case["protocol"]["name"]
+    sub = dict(schema["$defs"][f"protocol_{name}"])
+    _raise_first(_Validator(sub).iter_errors(case["protocol"]), source,
+                 tuple(prefix) + ("protocol",))
     _check_case(case, source, ".".join(map(str, prefix)) + "." if prefix else "")
     return case
+
+
+def size_extremes(diameter: dict) -> tuple[float, float, float]:
+    """``(smallest, mean, largest)`` diameter a distribution will produce in practice
+    (lognormal: mean +- 4 sigma, bounded below by a quarter of the mean)."""
+    mean = diameter["mean"]
+    dist = diameter.get("distribution", "mono")
+    if dist == "lognormal":
+        sig = diameter.get("sigma", 0.0)
+        return max(mean * (1 - 4 * sig), 0.25 * mean), mean, mean * (1 + 4 * sig)
+    if dist == "bidisperse":
+        big = mean * diameter.get("ratio", 1.4)
+        f = diameter.get("fraction_big", 0.5)
+        return mean, (1 - f) * mean + f * big, big
+    return mean, mean, mean
+
+
+def particle_measure(d: float, alpha: float, dimension: int) -> float:
+    """Volume (3-D) or area (2-D) of a spherocylinder of diameter ``d`` and ``L = alpha d``."""
+    length = alpha * d
+    if dimension == 2:
+        return d * length + math.pi * d * d / 4
+    return math.pi * d * d * length / 4 + math.pi * d**3 / 6
 
 
 def _check_case(case: dict, source: str, at: str):
@@ -188,45 +219,56 @@ def _check_case(case: dict, source: str, at: str):
     c = case["contact"]
     pr = case["protocol"]
     d = p["diameter"]
-    if d.get("distribution", "mono") == "mono" and d.get("sigma", 0):
+    dim = p["dimension"]
+    alpha = p["aspect_ratio"]
+    if d.get("distribution", "mono") != "lognormal" and d.get("sigma", 0):
         raise ConfigError(f"{source}: {at}particles.diameter.sigma = {d['sigma']} needs "
                           "distribution: lognormal (mono diameters have sigma 0)")
-    if pr["phi_init"] > PHI_INSERT_MAX:
+    phi_insert = PHI_INSERT_MAX if dim == 3 else PHI_INSERT_MAX_2D
+    if pr["phi_init"] > phi_insert:
         raise ConfigError(
             f"{source}: {at}protocol.phi_init = {pr['phi_init']} cannot be reached by random "
-            f"insertion; use a value <= {PHI_INSERT_MAX} and compress")
-    if pr["phi_final"] <= pr["phi_init"]:
-        raise ConfigError(f"{source}: {at}protocol.phi_final = {pr['phi_final']} must be above "
+            f"insertion in {dim}-D; use a value <= {phi_insert} and compress")
+    phi_end = pr["phi_final"] if pr["name"] == "compress" else 0.75
+    if pr["name"] == "compress":
+        if pr["phi_final"] <= pr["phi_init"]:
+            raise ConfigError(f"{source}: {at}protocol.phi_final = {pr['phi_final']} must be "
+                              f"above phi_init = {pr['phi_init']}")
+        has_fast = "phi_fast" in pr
+        if has_fast != ("rate_fast" in pr):
+            raise ConfigError(f"{source}: {at}protocol: phi_fast and rate_fast go together; "
+                              "give both or neither")
+        if has_fast and not pr["phi_init"] < pr["phi_fast"] < pr["phi_final"]:
+            raise ConfigError(
+                f"{source}: {at}protocol.phi_fast = {pr['phi_fast']} must lie between phi_init "
+                f"= {pr['phi_init']} and phi_final = {pr['phi_final']}")
+    if pr["name"] == "growth" and pr["phi_grow"] <= pr["phi_init"]:
+        raise ConfigError(f"{source}: {at}protocol.phi_grow = {pr['phi_grow']} must be above "
                           f"phi_init = {pr['phi_init']}")
-    has_fast = "phi_fast" in pr
-    if has_fast != ("rate_fast" in pr):
-        raise ConfigError(f"{source}: {at}protocol: phi_fast and rate_fast go together; "
-                          "give both or neither")
-    if has_fast and not pr["phi_init"] < pr["phi_fast"] < pr["phi_final"]:
-        raise ConfigError(
-            f"{source}: {at}protocol.phi_fast = {pr['phi_fast']} must lie between phi_init = "
-            f"{pr['phi_init']} and phi_final = {pr['phi_final']}")
     if c["friction"] > 0 and not c["k_t"] > 0:
         raise ConfigError(f"{source}: {at}contact.k_t = {c['k_t']} must be > 0 when "
                           f"friction = {c['friction']} > 0")
     # time step against the contact time of the lightest pair
-    dmin = d["mean"] * (1 - 4 * d.get("sigma", 0)) if d.get("distribution") == "lognormal" else d["mean"]
-    dmin = max(dmin, 0.25 * d["mean"])
-    m = p["density"] * math.pi / 6 * dmin**3
-    t_c = contact_time(c["k_n"], c["gamma_n"], 0.5 * m)
-    if pr["dt"] > DT_MAX_FRACTION * t_c:
+    dmin, dmean, dmax = size_extremes(d)
+    m = p["density"] * particle_measure(dmin, alpha, dim)
+    k = c["k_n"] / dmin**2 if c["law"] == "harmonic" else c["k_n"]
+    if c["law"] in ("hooke", "harmonic"):
+        t_c = contact_time(k, c["gamma_n"], 0.5 * m)
+        if pr["dt"] > DT_MAX_FRACTION * t_c:
+            raise ConfigError(
+                f"{source}: {at}protocol.dt = {pr['dt']} is above {DT_MAX_FRACTION} of the "
+                f"contact time t_c = {t_c:.3g}; use dt <= {DT_MAX_FRACTION * t_c:.3g} "
+                "(t_c/50 is usual)")
+    # the periodic box at the end must hold the longest particle plus skin twice
+    vol = p["n"] * particle_measure(dmean, alpha, dim)
+    side = (vol / phi_end) ** (1 / dim)
+    reach = dmax * (1 + alpha) * 1.2
+    if side < 2.0 * reach:
+        n_min = math.ceil(p["n"] * (2.0 * reach / side) ** dim)
         raise ConfigError(
-            f"{source}: {at}protocol.dt = {pr['dt']} is above {DT_MAX_FRACTION} of the contact "
-            f"time t_c = {t_c:.3g}; use dt <= {DT_MAX_FRACTION * t_c:.3g} (t_c/50 is usual)")
-    # the box at the end must hold the interaction range twice (minimum image)
-    vol = p["n"] * math.pi / 6 * d["mean"] ** 3 * (1 + 3 * d.get("sigma", 0) ** 2)
-    side = (vol / pr["phi_final"]) ** (1 / 3)
-    dmax = d["mean"] * (1 + 4 * d.get("sigma", 0))
-    if side < 3.0 * dmax:
-        n_min = math.ceil(p["n"] * (3.0 * dmax / side) ** 3)
-        raise ConfigError(
-            f"{source}: {at}particles.n = {p['n']} is too small for a periodic box at "
-            f"phi_final = {pr['phi_final']} (side {side:.3g} < 3 diameters); use n >= {n_min}")
+            f"{source}: {at}particles.n = {p['n']} is too small for a periodic box at packing "
+            f"fraction {phi_end} (side {side:.3g} < twice the particle length plus skin); "
+            f"use n >= {n_min}")
 
 
 def load_case(path) -> dict:

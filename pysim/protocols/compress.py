@@ -15,115 +15,97 @@ final state, bit for bit, as an uninterrupted run.
 from __future__ import annotations
 
 import math
-import os
 import time
-from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
-from pysim import checkpoint, io
+from pysim import io
+from pysim.protocols.output import ResumeError, RunFiles  # noqa: F401 (ResumeError re-exported)
 from pysim.simulation import BlowUpError, ContactModel, Simulation
 from pysim.state import State
 
-OUTPUTS = ("particles.dump", "contacts.dump", "thermo.dat")
-CHECKPOINT = "checkpoint.npz"
 
-
-def stage_plan(protocol: dict) -> list[tuple[str, int, float]]:
-    """``[(name, nsteps, strain_rate)]`` of the compression stages (rates negative)."""
+def stage_plan(protocol: dict, dimension: int = 3) -> list[tuple[str, int, float]]:
+    """``[(name, nsteps, strain_rate)]`` of the compression stages (rates negative); a
+    stage from ``phi_a`` to ``phi_b`` lasts ``round(ln(phi_b/phi_a) / (d rate dt))``."""
     dt = protocol["dt"]
     stages = []
     phi = protocol["phi_init"]
     if "phi_fast" in protocol:
-        n = round(math.log(protocol["phi_fast"] / phi) / (3.0 * protocol["rate_fast"] * dt))
+        n = round(math.log(protocol["phi_fast"] / phi) / (dimension * protocol["rate_fast"] * dt))
         stages.append(("fast", n, -protocol["rate_fast"]))
         phi = protocol["phi_fast"]
-    n = round(math.log(protocol["phi_final"] / phi) / (3.0 * protocol["rate"] * dt))
+    n = round(math.log(protocol["phi_final"] / phi) / (dimension * protocol["rate"] * dt))
     stages.append(("slow", n, -protocol["rate"]))
     return stages
 
 
-def simulation_from_case(case: dict, x, diameters, box) -> Simulation:
-    """Build the :class:`Simulation` a compression case describes."""
+def model_from_case(case: dict) -> ContactModel:
+    """The :class:`ContactModel` of a case's ``contact`` block."""
     c = case["contact"]
-    state = State.spheres(x, np.asarray(diameters) / 2.0, box,
-                          density=case["particles"]["density"])
-    model = ContactModel(c["law"], k_n=c["k_n"], gamma_n=c.get("gamma_n", 0.0),
-                         k_t=c.get("k_t", 0.0), gamma_t=c.get("gamma_t", 0.0),
-                         mu=c.get("friction", 0.0), gamma_bg=c.get("gamma_bg", 0.0))
-    return Simulation(state, model, dt=case["protocol"]["dt"],
-                      skin=0.2 * float(np.max(diameters)))
+    return ContactModel(c["law"], k_n=c["k_n"], gamma_n=c.get("gamma_n", 0.0),
+                        k_t=c.get("k_t", 0.0), gamma_t=c.get("gamma_t", 0.0),
+                        mu=c.get("friction", 0.0), gamma_bg=c.get("gamma_bg", 0.0),
+                        gamma_rot=c.get("gamma_rot", 0.0))
 
 
-class ResumeError(RuntimeError):
-    """A run cannot be resumed (no checkpoint, or its files do not match it)."""
+def state_from_init(case: dict, init: dict) -> State:
+    """A :class:`State` in a periodic box from an initial configuration read by
+    :func:`pysim.io.read_particle_data` (positions taken relative to the box origin)."""
+    dim = case["particles"].get("dimension", 3)
+    box = init["box"].copy()
+    x = init["x"] - init["box_lo"]
+    axis = init["axis"].copy()
+    if dim == 2:  # quaternions round to spines a hair out of the plane: project them back
+        box[2] = 0.0
+        x[:, 2] = 0.0
+        axis[:, 2] = 0.0
+        axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+    return State.create(x, init["radius"], init["length"], box, axis=axis,
+                        density=case["particles"].get("density", 1.0),
+                        periodic=(True, True, dim == 3), dimension=dim)
 
 
-def run(case: dict, x, diameters, box, out_dir, ids=None, progress: bool = True,
-        resume: bool = False, checkpoint_every: float = 300.0) -> dict:
+def simulation_from_case(case: dict, init: dict) -> Simulation:
+    """Build the :class:`Simulation` a compression case describes."""
+    state = state_from_init(case, init)
+    return Simulation(state, model_from_case(case), dt=case["protocol"]["dt"],
+                      skin=0.2 * 2.0 * float(np.max(state.radius)))
+
+
+def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = False,
+        checkpoint_every: float = 300.0) -> dict:
     """Run the compression protocol and write the common output files to ``out_dir``.
 
-    Returns a summary: steps, wall time, final thermo row, particle-steps per second.
-    Raises :class:`pysim.simulation.BlowUpError` (keeping the last checkpoint and the
-    partial files) when the integration becomes unstable.
+    ``init`` is the initial configuration (:func:`pysim.io.read_particle_data`). Returns
+    a summary: steps, wall time, final thermo row, particle-steps per second. Raises
+    :class:`pysim.simulation.BlowUpError` (keeping the last checkpoint and the partial
+    files) when the integration becomes unstable.
     """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    ckpt = out / CHECKPOINT
-    paths = {k: out / k for k in OUTPUTS}
+    files = RunFiles(out_dir, init["ids"])
     if resume:
-        if not ckpt.exists():
-            raise ResumeError(f"{ckpt}: no checkpoint to resume from; run without --resume")
-        sim, extra = checkpoint.load(ckpt)
-        for name, size in extra["files"].items():
-            part = io.part_path(paths[name])
-            if not part.exists() or part.stat().st_size < size:
-                raise ResumeError(f"{part}: missing or shorter ({part.stat().st_size if part.exists() else 0} "
-                                  f"bytes) than the checkpoint records ({size}); rerun from the start")
-            with open(part, "r+b") as fh:
-                fh.truncate(size)
-        fh = {k: open(io.part_path(p), "a") for k, p in paths.items()}
+        sim, _ = files.resume()
     else:
-        sim = simulation_from_case(case, x, diameters, box)
-        fh = {k: open(io.part_path(p), "w") for k, p in paths.items()}
-        fh["thermo.dat"].write(io.thermo_header())
-        if ckpt.exists():
-            ckpt.unlink()
+        sim = simulation_from_case(case, init)
+        files.start()
     s = sim.state
-    ids = np.arange(1, s.n + 1) if ids is None else np.asarray(ids)
-    types = np.ones(s.n, dtype=np.int64)
     outp = case.get("output", {})
     thermo_every = int(outp.get("thermo_every", 1000))
     dump_every = int(outp.get("dump_every", 4000))
     p_final = case["protocol"].get("pressure_final", math.inf)
-    stages = stage_plan(case["protocol"])
+    stages = stage_plan(case["protocol"], s.dimension)
     ends = np.cumsum([n for _, n, _ in stages])
-    total = int(ends[-1])
-
-    def dump():
-        io.write_particles_frame(fh["particles.dump"], s.step, s.box, s.periodic, ids, types,
-                                 s.x, s.radius)
-        ij, rec = sim.contact_table()
-        io.write_contacts_frame(fh["contacts.dump"], s.step, s.box, s.periodic, ids[ij], rec)
-
-    def save_checkpoint():
-        sizes = {}
-        for k, f in fh.items():
-            f.flush()
-            os.fsync(f.fileno())
-            sizes[k] = f.tell()
-        checkpoint.save(sim, ckpt, extra={"files": sizes})
 
     t0 = time.perf_counter()
     last_ckpt = t0
     steps_at_start = s.step
-    bar = tqdm(total=total, initial=s.step, disable=not progress, unit="step", mininterval=1.0,
-               desc="pysim compress", dynamic_ncols=True)
+    bar = tqdm(total=int(ends[-1]), initial=s.step, disable=not progress, unit="step",
+               mininterval=1.0, desc="pysim compress", dynamic_ncols=True)
     try:
         if not resume:
-            dump()
-            save_checkpoint()
+            files.dump(sim)
+            files.checkpoint(sim)
         for (name, _, rate), end in zip(stages, ends):
             while s.step < end:
                 nxt = min(int(end), (s.step // thermo_every + 1) * thermo_every,
@@ -133,33 +115,26 @@ def run(case: dict, x, diameters, box, out_dir, ids=None, progress: bool = True,
                 bar.update(s.step - before)
                 th = sim.thermo()
                 if s.step % thermo_every == 0:
-                    io.write_thermo_row(fh["thermo.dat"], th.row())
+                    files.thermo(th.row())
                     bar.set_postfix(stage=name, phi=f"{th.phi:.4f}", p=f"{th.pressure:.3g}",
                                     ke=f"{th.ke:.3g}", refresh=False)
                 if s.step % dump_every == 0:
-                    dump()
+                    files.dump(sim)
                 if name == "slow" and th.pressure >= p_final:
                     break
                 if time.perf_counter() - last_ckpt > checkpoint_every:
-                    save_checkpoint()
+                    files.checkpoint(sim)
                     last_ckpt = time.perf_counter()
             else:
                 continue
             break  # pressure_final reached
     except BlowUpError as exc:
-        bar.close()
-        for f in fh.values():
-            f.close()
-        raise BlowUpError(f"{exc}; the last good checkpoint is {ckpt}") from None
+        raise BlowUpError(f"{exc}; the last good checkpoint is {files.ckpt}") from None
     finally:
         bar.close()
-        for f in fh.values():
-            if not f.closed:
-                f.close()
+        files.close()
     wall = time.perf_counter() - t0
-    for p in paths.values():
-        io.finalize(p)
-    ckpt.unlink(missing_ok=True)
+    files.finalize()
     th = sim.thermo()
     done = s.step - steps_at_start
     return {"steps": s.step, "wall_seconds": wall, "final": dict(zip(io.THERMO_COLUMNS, th.row())),

@@ -1,0 +1,140 @@
+"""Growth to jamming (science.md section 4, the 3-D random-packing study).
+
+1. **Grow**: from the random start at ``phi_init`` every ``D`` and ``L`` grows as
+   ``exp(rate t)`` (aspect ratio fixed) under velocity Verlet with the case's damping,
+   until ``phi_grow``; thermo rows and dumps as in the compression driver.
+2. **Relax / increment**: relax with FIRE (forces and torques below
+   ``force_tol * k_n D``). A relaxed packing whose elastic energy per particle is below
+   ``energy_tol * k_n D^2`` is *unjammed*, otherwise *jammed*. While unjammed, grow by
+   ``increment`` (rescaling the particles) and relax again; a jammed packing at
+   ``phi_grow`` is shrunk by ``increment`` steps instead.
+3. **Bisect** between the last unjammed (``phi_lo``) and the first jammed (``phi_hi``)
+   packing fraction, always restarting from the relaxed unjammed packing, until
+   ``phi_hi - phi_lo < tolerance``; ``phi_J = phi_hi``.
+
+Every relaxed packing is a frame of ``particles.dump``/``contacts.dump`` and a row of
+``cycles.dat`` (``step phi pe_per_particle pressure n_contacts jammed``), which is what
+the analysis of ``<C>(phi)``, ``P(C)`` and the order along the way reads. The driver
+checkpoints after every relaxation and resumes bit-identically.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from tqdm import tqdm
+
+from pysim import checkpoint
+from pysim.protocols.compress import model_from_case, state_from_init
+from pysim.protocols.output import RunFiles
+from pysim.simulation import BlowUpError, Simulation
+
+CYCLES_HEADER = "# step phi pe_per_particle pressure n_contacts jammed\n"
+
+
+def _relax(sim: Simulation, p: dict, k_n: float, d_mean: float) -> tuple[float, bool]:
+    """FIRE to force balance; returns (elastic energy per particle, jammed)."""
+    it, _, _ = sim.minimize(f_tol=p["force_tol"] * k_n * d_mean, max_iter=p["max_relax"])
+    sim.state.step += it  # FIRE iterations count as steps, so steps stay unique
+    th = sim.thermo()
+    e = th.pe / sim.state.n / (k_n * d_mean**2)
+    return e, e >= p["energy_tol"]
+
+
+def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = False,
+        checkpoint_every: float = 300.0) -> dict:
+    """Run the growth protocol; returns a summary with ``phi_j`` and ``phi_j_low``."""
+    p = case["protocol"]
+    files = RunFiles(out_dir, init["ids"], extra={"cycles.dat": CYCLES_HEADER})
+    lo_path = files.dir / "checkpoint_unjammed.npz"
+    if resume:
+        sim, drv = files.resume()
+    else:
+        state = state_from_init(case, init)
+        sim = Simulation(state, model_from_case(case), dt=p["dt"],
+                         skin=0.2 * 2.0 * float(np.max(state.radius)))
+        files.start()
+        drv = {"phase": "grow", "lo": None, "hi": None, "increment": p["increment"]}
+    s = sim.state
+    k_n = case["contact"]["k_n"]
+    outp = case.get("output", {})
+    thermo_every = int(outp.get("thermo_every", 1000))
+    dump_every = int(outp.get("dump_every", 4000))
+    n_grow = round(math.log(p["phi_grow"] / p["phi_init"]) / (s.dimension * p["rate"] * p["dt"]))
+    t0 = time.perf_counter()
+    last_ckpt = t0
+    bar = tqdm(total=n_grow, initial=min(s.step, n_grow), disable=not progress, unit="step",
+               mininterval=1.0, desc="pysim growth", dynamic_ncols=True)
+
+    def d_now():
+        return float(np.mean(2 * s.radius))
+
+    def record(e, jammed):
+        th = sim.thermo()
+        files.thermo(th.row())
+        files.dump(sim)
+        files.write("cycles.dat", f"{s.step} {th.phi:.12g} {e:.6g} {th.pressure:.10g} "
+                                  f"{th.n_contacts} {int(jammed)}\n")
+        bar.set_postfix(phi=f"{th.phi:.5f}", e=f"{e:.2g}", jammed=int(jammed), refresh=False)
+
+    try:
+        if drv["phase"] == "grow":
+            if s.step == 0:
+                files.dump(sim)
+            while s.step < n_grow:
+                nxt = min(n_grow, (s.step // thermo_every + 1) * thermo_every,
+                          (s.step // dump_every + 1) * dump_every)
+                before = s.step
+                sim.run(nxt - s.step, growth_rate=p["rate"])
+                bar.update(s.step - before)
+                if s.step % thermo_every == 0:
+                    files.thermo(sim.thermo().row())
+                if s.step % dump_every == 0:
+                    files.dump(sim)
+                if time.perf_counter() - last_ckpt > checkpoint_every:
+                    files.checkpoint(sim, drv)
+                    last_ckpt = time.perf_counter()
+            drv["phase"] = "cycles"
+            e, jammed = _relax(sim, p, k_n, d_now())
+            record(e, jammed)
+            phi = s.packing_fraction()
+            if jammed:
+                drv["hi"] = phi
+            else:
+                drv["lo"] = phi
+                checkpoint.save(sim, lo_path)
+            files.checkpoint(sim, drv)
+        while drv["lo"] is None or drv["hi"] is None or drv["hi"] - drv["lo"] >= p["tolerance"]:
+            phi = s.packing_fraction()
+            if drv["hi"] is None:  # unjammed so far: grow by the increment
+                target = phi + drv["increment"]
+            elif drv["lo"] is None:  # jammed from the start: shrink by the increment
+                target = phi - drv["increment"]
+            else:  # bisect from the relaxed unjammed packing
+                target = 0.5 * (drv["lo"] + drv["hi"])
+                step, t = s.step, s.time
+                sim, _ = checkpoint.load(lo_path)
+                s = sim.state
+                s.step, s.time = step, t
+                phi = s.packing_fraction()
+            sim.rescale_particles((target / phi) ** (1.0 / s.dimension))
+            e, jammed = _relax(sim, p, k_n, d_now())
+            record(e, jammed)
+            phi = s.packing_fraction()
+            if jammed:
+                drv["hi"] = phi if drv["hi"] is None else min(drv["hi"], phi)
+            else:
+                drv["lo"] = phi if drv["lo"] is None else max(drv["lo"], phi)
+                checkpoint.save(sim, lo_path)
+            files.checkpoint(sim, drv)
+    except BlowUpError as exc:
+        raise BlowUpError(f"{exc}; the last good checkpoint is {files.ckpt}") from None
+    finally:
+        bar.close()
+        files.close()
+    files.finalize()
+    lo_path.unlink(missing_ok=True)
+    wall = time.perf_counter() - t0
+    return {"steps": s.step, "wall_seconds": wall, "phi_j": drv["hi"], "phi_j_low": drv["lo"],
+            "resumed": bool(resume), "neighbor_rebuilds": sim.rebuilds}
