@@ -11,35 +11,50 @@
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 
 from analysis.contacts import ContactNumber
 from analysis.io import RunData
 from analysis.jamming import JammingFitError, JammingPoint
+from analysis.order import NematicOrder
 from analysis.packing import packing_fraction
 from analysis.stress import pressure
 
 TIDY_COLUMNS = ["study", "case", "engine", "seed", "observable", "value", "uncertainty"]
 
 
-def analyse_compression(run_dir, window, p_scale: float, c_min: int = 4):
-    """Observables ``[(name, value, uncertainty)]`` and per-frame curves of one run.
+def frame_curves(run: RunData, c_min: int | None = None) -> pd.DataFrame:
+    """Per output frame: ``phi``, contact ``pressure`` (from the contact table), ``z``,
+    ``z_rattler_free``, ``z_bonds`` (2-D: parallel side contacts twice), ``n_rattlers``,
+    and for rods the nematic order ``s_nematic``. Rattlers follow science.md's rule for
+    the frame (:class:`analysis.contacts.ContactNumber`, ``c_min`` overrides it)."""
+    rows = []
+    for frame, contacts in run.frames():
+        cn = ContactNumber(c_min).compute(frame, contacts)
+        row = {"step": frame.step, "phi": packing_fraction(frame),
+               "pressure": pressure(frame, contacts, dim=frame.dim), "z": cn.z,
+               "z_rattler_free": cn.z_rattler_free, "z_bonds": cn.z_bonds,
+               "n_rattlers": cn.n_rattlers, "n": frame.n, "s_nematic": np.nan}
+        if np.any(frame.length > 0):
+            row["s_nematic"] = NematicOrder().compute(frame).S
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def analyse_compression(run_dir, window, p_scale: float, c_min: int | None = None):
+    """Observables ``[(name, value, uncertainty)]`` and per-frame curves of one
+    compression run.
 
     ``window`` is the jamming-fit pressure window in units of ``p_scale`` (``k_n/D``);
-    ``c_min`` the rattler threshold (3-D spheres: 4).
+    ``c_min`` overrides the rattler rule (default: science.md's rule for the frame).
     """
     run = RunData(run_dir)
     thermo = run.thermo
     rows = []
-    curves = []
-    for frame, contacts in run.frames():
-        cn = ContactNumber(c_min).compute(frame, contacts)
-        curves.append({"step": frame.step, "phi": packing_fraction(frame),
-                       "pressure": pressure(frame, contacts), "z": cn.z,
-                       "z_rattler_free": cn.z_rattler_free, "n_rattlers": cn.n_rattlers,
-                       "n": frame.n})
-    curves = pd.DataFrame(curves)
+    curves = frame_curves(run, c_min)
     try:
         jp = JammingPoint(window, p_scale).compute(thermo.phi.to_numpy(), thermo.pressure.to_numpy())
         phi_j, phi_j_err, slope = jp.phi_j, jp.phi_j_err, jp.slope
@@ -51,17 +66,53 @@ def analyse_compression(run_dir, window, p_scale: float, c_min: int = 4):
     if len(above):
         first = above.iloc[0]
         rows += [("z_j", first.z_rattler_free, np.nan),
+                 ("z_j_bonds", first.z_bonds, np.nan),
                  ("z_j_with_rattlers", first.z, np.nan),
                  ("rattler_fraction_j", first.n_rattlers / first.n, np.nan),
-                 ("phi_at_z_j", first.phi, np.nan)]
+                 ("phi_at_z_j", first.phi, np.nan),
+                 ("s_nematic_j", first.s_nematic, np.nan)]
     else:
         rows += [(k, np.nan, np.nan) for k in
-                 ("z_j", "z_j_with_rattlers", "rattler_fraction_j", "phi_at_z_j")]
+                 ("z_j", "z_j_bonds", "z_j_with_rattlers", "rattler_fraction_j", "phi_at_z_j",
+                  "s_nematic_j")]
     last = thermo.iloc[-1]
     rows += [("phi_final", float(last.phi), np.nan), ("pressure_final", float(last.pressure), np.nan)]
     curves.attrs["fit"] = fit
     return rows, curves, thermo
 
+
+def analyse_growth(run_dir, c_min: int | None = None):
+    """Observables and curves of a growth-to-jamming run (pysim's ``cycles.dat``).
+
+    ``phi_j`` is the first jammed packing fraction of the bisection and its uncertainty
+    the distance to the last unjammed one; ``z_j`` etc. are those of the jammed relaxed
+    packing at ``phi_j``. Curves: every output frame, with ``relaxed`` and ``jammed``
+    flags for the frames of the relax/increment cycles.
+    """
+    run = RunData(run_dir)
+    thermo = run.thermo
+    cycles = pd.read_csv(Path(run_dir) / "cycles.dat", sep=r"\s+", comment="#", header=None,
+                         names=["step", "phi", "e", "p", "nc", "jammed"])
+    curves = frame_curves(run, c_min)
+    curves["relaxed"] = curves.step.isin(cycles.step)
+    curves["jammed"] = curves.step.isin(cycles.step[cycles.jammed == 1])
+    jam = cycles[cycles.jammed == 1]
+    free = cycles[cycles.jammed == 0]
+    rows = []
+    if len(jam) and len(free):
+        hi = jam.loc[jam.phi.idxmin()]
+        lo = free.phi.max()
+        rows.append(("phi_j", float(hi.phi), float(hi.phi - lo)))
+        first = curves[curves.step == hi.step].iloc[0]
+        rows += [("z_j", first.z_rattler_free, np.nan), ("z_j_bonds", first.z_bonds, np.nan),
+                 ("z_j_with_rattlers", first.z, np.nan),
+                 ("rattler_fraction_j", first.n_rattlers / first.n, np.nan),
+                 ("phi_at_z_j", first.phi, np.nan), ("s_nematic_j", first.s_nematic, np.nan)]
+    else:
+        rows += [(k, np.nan, np.nan) for k in ("phi_j", "z_j", "z_j_bonds", "z_j_with_rattlers",
+                                               "rattler_fraction_j", "phi_at_z_j", "s_nematic_j")]
+    rows += [("relax_cycles", float(len(cycles)), np.nan)]
+    return rows, curves, thermo
 
 def tidy(rows, study, case, engine, seed, parameters: dict | None = None) -> pd.DataFrame:
     """Tidy table of observables with one column per varying case parameter."""

@@ -334,13 +334,6 @@ def validate_config(config: dict, source: str = "config") -> dict:
                 prefix = ("studies", name, "variants", vname) if "variants" in study else \
                     ("studies", name, "case")
                 cases[(name, vname, seed)] = validate_case(merged, source, prefix)
-        for engine in study["engines"]:
-            if engine == "pysim":
-                for (s, v, _), c in cases.items():
-                    if s == name and c["contact"]["friction"] > 0:
-                        raise ConfigError(
-                            f"{source}: studies.{name} variant {v}: pysim does not implement "
-                            "friction yet; remove pysim from engines or set friction: 0")
     config["_cases"] = cases
     return config
 
@@ -350,11 +343,20 @@ def load_config(path) -> dict:
 
 
 def runs(config: dict, skipped: list | None = None) -> list[Run]:
-    """All runs of a validated configuration; engines that are not installed are left
-    out and reported in ``skipped`` (a list of one-line messages)."""
+    """All runs of a validated configuration; engines that are not installed, or that
+    cannot run a variant (:func:`workflows.engines.supports`), are left out and reported
+    in ``skipped`` (a list of one-line messages)."""
+    from workflows.engines import supports
+
     out = []
-    for (study, variant, seed), _ in config["_cases"].items():
+    for (study, variant, seed), case in config["_cases"].items():
         for engine in config["studies"][study]["engines"]:
+            reason = supports(engine, case)
+            if reason:
+                msg = f"skipping {engine} for study '{study}' variant '{variant}': {reason}"
+                if skipped is not None and msg not in skipped:
+                    skipped.append(msg)
+                continue
             if not engine_available(engine):
                 if skipped is not None:
                     msg = (f"{engine} is not installed: skipping its runs of study '{study}' "

@@ -23,18 +23,57 @@ import numpy as np
 from pysim import io
 
 PROJECT_ROOT = Path(__file__).resolve().parents[1]
-DECKS = {
-    "lammps": PROJECT_ROOT / "inputs" / "lammps" / "in.spheres.compress",
-    "liggghts": PROJECT_ROOT / "inputs" / "liggghts" / "in.spheres.compress",
-}
+INPUTS = PROJECT_ROOT / "inputs"
 
 
 class EngineError(RuntimeError):
     """An engine run failed; the message names the engine's error line and log file."""
 
 
+def kind(case: dict) -> str:
+    """``spheres`` (3-D, ``L = 0``), ``rods`` (3-D spherocylinders) or ``2d``."""
+    p = case["particles"]
+    if p.get("dimension", 3) == 2:
+        return "2d"
+    return "rods" if p.get("aspect_ratio", 0.0) > 0 else "spheres"
+
+
+def supports(engine: str, case: dict) -> str | None:
+    """``None`` when the engine can run the case, else the reason it cannot."""
+    if engine == "pysim":
+        return None
+    k = kind(case)
+    name = case["protocol"]["name"]
+    if name != "compress":
+        return f"{engine} runs only the 'compress' protocol here, not '{name}'"
+    if k == "2d":
+        return f"{engine} has no 2-D deck yet"
+    if k == "rods" and engine == "liggghts":
+        return ("LIGGGHTS cannot compress multisphere rods with fix deform ('fix deform and fix "
+                "multisphere are incompatible', shared/engines.md)")
+    if k == "rods" and case["contact"].get("friction", 0.0) > 0:
+        return f"the {engine} rods deck is frictionless"
+    return None
+
+
+def deck(engine: str, case: dict) -> Path:
+    """The input deck that runs a case on an engine."""
+    reason = supports(engine, case)
+    if reason:
+        raise EngineError(reason)
+    return INPUTS / engine / f"in.{kind(case)}.compress"
+
+
+def glued_spheres(length: float, diameter: float, spacing: float) -> int:
+    """Number of equal spheres that glue into a rod: end spheres at the spine ends, centre
+    spacing at most ``spacing * D``."""
+    if length <= 0:
+        return 1
+    return int(np.ceil(length / (spacing * diameter) - 1e-9)) + 1
+
+
 def deck_vars(case: dict, engine: str) -> dict[str, str]:
-    """``-var`` values of the sphere compression deck for a case."""
+    """``-var`` values of a compression deck for a case."""
     c, pr = case["contact"], case["protocol"]
     out = case.get("output", {})
     v = {
@@ -49,10 +88,16 @@ def deck_vars(case: dict, engine: str) -> dict[str, str]:
         v["phi_fast"], v["rate_fast"] = pr["phi_init"], 1.0
     if "pressure_final" in pr:
         v["p_final"] = pr["pressure_final"]
-    if engine == "lammps":
+    if kind(case) == "rods":
+        p = case["particles"]
+        d = p["diameter"]["mean"]
+        v["spheres"] = glued_spheres(p["aspect_ratio"] * d, d, p.get("glued_spacing", 0.25))
+        for key in ("mu", "k_t"):
+            v.pop(key)
+    elif engine == "lammps":
         v["x_gamma_t"] = 0.0
     else:
-        v["gamma_t"] = 0.0
+        v["gamma_t"] = c.get("gamma_t", 0.0)
     return {k: repr(float(x)) if isinstance(x, float) else str(x) for k, x in v.items()}
 
 
@@ -68,17 +113,19 @@ def venv_bin(name: str) -> str:
     return found
 
 
-def command(engine: str, data: Path, outdir: Path, case: dict, ranks: int = 1) -> list[str]:
+def command(engine: str, data: Path, outdir: Path, case: dict, ranks: int = 1,
+            extra_vars: dict | None = None) -> list[str]:
     """The command line that runs the case's deck."""
     args = []
-    for k, val in deck_vars(case, engine).items():
-        args += ["-var", k, val]
+    for k, val in {**deck_vars(case, engine), **(extra_vars or {})}.items():
+        args += ["-var", k, str(val)]
     args += ["-var", "data", str(data), "-var", "outdir", str(outdir)]
+    path = deck(engine, case)
     if engine == "lammps":
         exe = [venv_bin("lmp")]
         if ranks > 1:
             exe = [venv_bin("mpiexec"), "-n", str(ranks)] + exe
-        return exe + ["-in", str(DECKS["lammps"]), "-log", str(outdir / "log.lammps")] + args
+        return exe + ["-in", str(path), "-log", str(outdir / "log.lammps")] + args
     if engine == "liggghts":
         exe = shutil.which("liggghts")
         if exe is None:
@@ -86,7 +133,7 @@ def command(engine: str, data: Path, outdir: Path, case: dict, ranks: int = 1) -
         pre = []
         if ranks > 1:
             pre = [shutil.which("mpirun") or "mpirun", "--allow-run-as-root", "-np", str(ranks)]
-        return pre + [exe, "-in", str(DECKS["liggghts"]), "-log", str(outdir / "log.liggghts")] + args
+        return pre + [exe, "-in", str(path), "-log", str(outdir / "log.liggghts")] + args
     raise ValueError(f"unknown engine {engine!r}; valid: lammps, liggghts")
 
 
@@ -116,7 +163,12 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     if work.exists():
         shutil.rmtree(work)
     work.mkdir(parents=True)
-    cmd = command(engine, Path(data).resolve(), work.resolve(), case, ranks)
+    extra = {}
+    engine_data = Path(data).resolve()
+    if kind(case) == "rods":
+        engine_data = (work / "glued.data").resolve()
+        extra["vrods"] = repr(float(write_glued_data(data, engine_data, case)))
+    cmd = command(engine, engine_data, work.resolve(), case, ranks, extra)
     screen_path = work / "screen.txt"
     env = dict(os.environ, OMP_NUM_THREADS="1")
     t0 = time.perf_counter()
@@ -139,8 +191,13 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     particles = work / "particles.dump"
     if engine == "liggghts":
         restore_box_precision(particles, work / "box.dat", data)
-    convert = convert_lammps_contacts if engine == "lammps" else convert_liggghts_contacts
-    stats = convert(work / "contacts.native", particles, work / "contacts.dump")
+    if kind(case) == "rods":
+        stats = convert_glued_rods(work / "contacts.native", particles, work / "contacts.dump",
+                                   work / "rods.dump")
+        os.replace(work / "rods.dump", particles)
+    else:
+        convert = convert_lammps_contacts if engine == "lammps" else convert_liggghts_contacts
+        stats = convert(work / "contacts.native", particles, work / "contacts.dump")
     for name in ("particles.dump", "contacts.dump", "thermo.dat"):
         os.replace(work / name, outdir / name)
     steps = _last_step(outdir / "thermo.dat")
@@ -149,6 +206,99 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
             "wall_seconds": wall, "steps": steps,
             "particle_steps_per_second": n * steps / wall if wall > 0 else float("nan"),
             "contacts_dropped": stats["dropped"], "status": "ok"}
+
+
+def write_glued_data(init_path, out_path, case: dict) -> float:
+    """Write the rods of an initial configuration as glued equal spheres for LAMMPS
+    ``fix rigid/small molecule`` and return the total true rod volume.
+
+    Each rod becomes :func:`glued_spheres` spheres of its diameter, centres evenly spaced
+    from one spine end to the other (``atom_style sphere`` atoms plus a ``Molecules``
+    section read with ``fix property/atom mol``). Every sphere gets the density that gives
+    the rod the mass of the solid spherocylinder, ``rho V_rod / (n pi D^3 / 6)``. Spheres
+    are written around the rod centre without wrapping, so LAMMPS sets image flags that
+    keep each body whole.
+    """
+    from pysim.io import atomic_write_text, read_particle_data
+
+    d = read_particle_data(init_path)
+    spacing = case["particles"].get("glued_spacing", 0.25)
+    rho = case["particles"].get("density", 1.0)
+    rows, mols = [], []
+    vtot = 0.0
+    k = 0
+    for i in range(len(d["ids"])):
+        dia = 2.0 * d["radius"][i]
+        length = d["length"][i]
+        ns = glued_spheres(length, dia, spacing)
+        vrod = np.pi * dia**2 * length / 4 + np.pi * dia**3 / 6
+        vtot += vrod
+        dens = rho * vrod / (ns * np.pi * dia**3 / 6)
+        offsets = np.linspace(-length / 2, length / 2, ns) if ns > 1 else np.zeros(1)
+        for sk in offsets:
+            k += 1
+            p = d["x"][i] + sk * d["axis"][i]
+            rows.append(f"{k} 1 {dia:.16g} {dens:.16g} {p[0]:.16g} {p[1]:.16g} {p[2]:.16g}")
+            mols.append(f"{k} {d['ids'][i]}")
+    lo, hi = d["box_lo"], d["box_lo"] + d["box"]
+    head = [f"# rodpack glued-sphere rods ({len(d['ids'])} rods, spacing <= {spacing} D)", "",
+            f"{k} atoms", "1 atom types", ""]
+    head += [f"{lo[a]:.16g} {hi[a]:.16g} {ax}lo {ax}hi" for a, ax in enumerate("xyz")]
+    text = "\n".join(head + ["", "Atoms # sphere", ""] + rows + ["", "Molecules", ""] + mols)
+    atomic_write_text(out_path, text + "\n")
+    return vtot
+
+
+def convert_glued_rods(native: Path, particles: Path, out_contacts: Path, out_particles: Path):
+    """Glued-sphere output of the LAMMPS rods deck -> rods in the common format.
+
+    Each frame of spheres (``id mol type x y z radius``) becomes a frame of
+    spherocylinders (:func:`analysis.contacts.glued_bodies`: centre, axis, spine length
+    from the sphere centres, id = molecule id); the sphere contacts of two rods merge into
+    one rod-rod contact (:func:`analysis.contacts.merge_glued_contacts`: summed force,
+    force-weighted point, deepest overlap).
+    """
+    from analysis.contacts import glued_bodies, merge_glued_contacts
+    from analysis.frame import Contacts
+    from analysis.io import read_particle_frames
+
+    spheres = {f.step: f for f in read_particle_frames(particles)}
+    mol = {}
+    for step, _b, _p, cols, table in _iter_dump(particles):
+        c = {name: k for k, name in enumerate(cols)}
+        order = np.argsort(table[:, c["id"]], kind="stable")
+        mol[step] = table[order, c["mol"]].astype(np.int64)
+    dropped = 0
+    with open(io.part_path(out_contacts), "w") as fc, open(io.part_path(out_particles), "w") as fp:
+        for step, _box, cols, table in _iter_local(native):
+            fr = spheres[step]
+            ids_i, ids_j = table[:, 0], table[:, 1]
+            n, delta, point = _geometry(fr, ids_i, ids_j)
+            keep = delta > 0
+            dropped += int(np.count_nonzero(~keep))
+            sph = Contacts(step, ids_i[keep].astype(np.int64), ids_j[keep].astype(np.int64),
+                           point[keep], n[keep], delta[keep], (table[:, 3:6] + table[:, 6:9])[keep])
+            rods, _ = glued_bodies(fr, mol[step])
+            merged, _ = merge_glued_contacts(fr, sph, mol[step])
+            centre = np.where(rods.periodic,
+                              rods.box_lo + np.mod(rods.x - rods.box_lo, rods.box), rods.x)
+            io.write_particles_frame(fp, step, rods.box, rods.periodic, rods.ids, rods.types,
+                                     centre, rods.radius, axis=rods.axis, length=rods.length,
+                                     box_lo=rods.box_lo)
+            rec = np.column_stack([merged.point, merged.normal, merged.overlap, merged.force])
+            io.write_contacts_frame(fc, step, rods.box, rods.periodic,
+                                    np.column_stack([merged.i, merged.j]), rec, box_lo=rods.box_lo)
+    io.finalize(out_contacts)
+    io.finalize(out_particles)
+    return {"dropped": dropped}
+
+
+def _iter_dump(path: Path):
+    """Yield ``(step, box_lines, periodic, columns, table)`` of a particle dump."""
+    from analysis.io import _blocks
+
+    for step, bounds, periodic, cols, table, _first in _blocks(path, "ITEM: NUMBER OF ATOMS"):
+        yield step, bounds, periodic, cols, table
 
 
 def restore_box_precision(particles: Path, box_file: Path, data: Path):

@@ -42,12 +42,17 @@ def stage_plan(protocol: dict, dimension: int = 3) -> list[tuple[str, int, float
 
 
 def model_from_case(case: dict) -> ContactModel:
-    """The :class:`ContactModel` of a case's ``contact`` block."""
+    """The :class:`ContactModel` of a case's ``contact`` block. Without an explicit
+    ``gamma_rot`` the rotational drag is that of a drag spread evenly along the spine,
+    ``gamma_bg L^2 / 12`` (``L`` of the mean diameter)."""
     c = case["contact"]
+    p = case["particles"]
+    length = p.get("aspect_ratio", 0.0) * p["diameter"]["mean"]
+    gamma_bg = c.get("gamma_bg", 0.0)
     return ContactModel(c["law"], k_n=c["k_n"], gamma_n=c.get("gamma_n", 0.0),
                         k_t=c.get("k_t", 0.0), gamma_t=c.get("gamma_t", 0.0),
-                        mu=c.get("friction", 0.0), gamma_bg=c.get("gamma_bg", 0.0),
-                        gamma_rot=c.get("gamma_rot", 0.0))
+                        mu=c.get("friction", 0.0), gamma_bg=gamma_bg,
+                        gamma_rot=c.get("gamma_rot", gamma_bg * length**2 / 12.0))
 
 
 def state_from_init(case: dict, init: dict) -> State:

@@ -6,7 +6,7 @@ import json
 import sys
 from pathlib import Path
 
-from analysis.summary import analyse_compression, tidy
+from analysis.summary import analyse_compression, analyse_growth, tidy
 from pysim.io import atomic_write_text
 from workflows.case import ConfigError, load_case
 
@@ -31,7 +31,10 @@ def main(argv=None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     p_scale = case["contact"]["k_n"] / case["particles"]["diameter"]["mean"]
-    rows, curves, _thermo = analyse_compression(a.run, a.window, p_scale, c_min=4)
+    if case["protocol"]["name"] == "growth":
+        rows, curves, _thermo = analyse_growth(a.run)
+    else:
+        rows, curves, _thermo = analyse_compression(a.run, a.window, p_scale)
     df = tidy(rows, a.study, a.variant, a.engine, a.seed, json.loads(a.parameters))
     atomic_write_text(a.observables, df.to_csv(index=False))
     atomic_write_text(a.curves, curves.to_csv(index=False))
