@@ -106,3 +106,11 @@ def observable_by_engine(stats, observable, out, ylabel=None, band=None):
     ax.set_ylabel(ylabel or observable)
     ax.legend(fontsize=8)
     _save(fig, out)
+
+
+def message_figure(out, message: str):
+    """A figure that only says why there is nothing to draw (e.g. every run failed)."""
+    fig, ax = plt.subplots(figsize=(6, 2))
+    ax.axis("off")
+    ax.text(0.5, 0.5, message, ha="center", va="center", wrap=True)
+    _save(fig, out)

@@ -188,6 +188,11 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
                           f"log: {screen_path}")
     if "Lost atoms" in text:
         raise EngineError(f"{engine} lost atoms; log: {screen_path}")
+    dangerous = sum(int(m) for m in re.findall(r"Dangerous builds\s*=\s*(\d+)", text))
+    if dangerous:
+        raise EngineError(f"{engine} reported {dangerous} dangerous neighbour-list builds (pairs "
+                          "may have been missed): reduce dt or the compression rate, or raise "
+                          f"the skin; log: {screen_path}")
     particles = work / "particles.dump"
     if engine == "liggghts":
         restore_box_precision(particles, work / "box.dat", data)

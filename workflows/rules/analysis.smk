@@ -12,7 +12,7 @@ def _parameters(wc):
 rule analyse_run:
     input:
         case=f"{RUN}/case.yaml",
-        files=[f"{RUN}/{{engine}}/{name}" for name in COMMON],
+        record=f"{RUN}/{{engine}}/run.json",
     output:
         observables=f"{RUN}/{{engine}}/observables.csv",
         curves=f"{RUN}/{{engine}}/curves.csv",
@@ -34,7 +34,8 @@ rule analyse_run:
 
 rule summary:
     input:
-        [f"{d}/observables.csv" for d in run_dirs()],
+        observables=[f"{d}/observables.csv" for d in run_dirs()],
+        records=[f"{d}/run.json" for d in run_dirs()],
     output:
         summary=report(
             f"{RESULTS}/summary.csv",
@@ -46,8 +47,14 @@ rule summary:
             caption="../report/comparison.rst",
             category="Tables",
         ),
+        failures=report(
+            f"{RESULTS}/failures.csv",
+            caption="../report/failures.rst",
+            category="Tables",
+        ),
     log:
         f"{RESULTS}/summary.log",
     shell:
         "{PYTHON} -m workflows.scripts.summarize --summary {output.summary}"
-        " --comparison {output.comparison} {input} 2> {log}"
+        " --comparison {output.comparison} --failures {output.failures}"
+        " --records {input.records} --observables {input.observables} 2> {log}"

@@ -17,7 +17,7 @@ rule plot_study:
         lambda wc: [
             f"{d}/{name}"
             for d in _study_run_dirs(wc)
-            for name in ("observables.csv", "curves.csv", "thermo.dat")
+            for name in ("observables.csv", "curves.csv", "run.json")
         ],
     output:
         pressure=report(

@@ -6,9 +6,12 @@ import json
 import sys
 from pathlib import Path
 
-from analysis.summary import analyse_compression, analyse_growth, tidy
+from analysis.summary import TIDY_COLUMNS, analyse_compression, analyse_growth, tidy
 from pysim.io import atomic_write_text
 from workflows.case import ConfigError, load_case
+
+#: provenance columns copied from run.json into every result row
+PROVENANCE = ("engine_version", "case_hash", "git_revision")
 
 
 def main(argv=None) -> int:
@@ -30,12 +33,21 @@ def main(argv=None) -> int:
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    record = json.loads((a.run / "run.json").read_text())
+    if record.get("status") != "ok":
+        # a failed run has no observables; summarize lists it in failures.csv
+        cols = TIDY_COLUMNS + list(json.loads(a.parameters)) + list(PROVENANCE)
+        atomic_write_text(a.observables, ",".join(cols) + "\n")
+        atomic_write_text(a.curves, "step,phi\n")
+        return 0
     p_scale = case["contact"]["k_n"] / case["particles"]["diameter"]["mean"]
     if case["protocol"]["name"] == "growth":
         rows, curves, _thermo = analyse_growth(a.run)
     else:
         rows, curves, _thermo = analyse_compression(a.run, a.window, p_scale)
     df = tidy(rows, a.study, a.variant, a.engine, a.seed, json.loads(a.parameters))
+    for key in PROVENANCE:
+        df[key] = record.get(key, "unknown")
     atomic_write_text(a.observables, df.to_csv(index=False))
     atomic_write_text(a.curves, curves.to_csv(index=False))
     if "error" in curves.attrs.get("fit", {}):

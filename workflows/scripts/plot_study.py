@@ -3,6 +3,7 @@ versus packing fraction, and phi_J per engine."""
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -27,6 +28,8 @@ def main(argv=None) -> int:
     runs, obs = [], []
     seeds = {}
     for d in a.run_dirs:
+        if json.loads((d / "run.json").read_text()).get("status") != "ok":
+            continue  # failed runs are listed in failures.csv, not drawn
         o = pd.read_csv(d / "observables.csv")
         obs.append(o)
         val = dict(zip(o.observable, o.value))
@@ -38,6 +41,12 @@ def main(argv=None) -> int:
                      "slope": val.get("jamming_slope")})
     for r in runs:
         r["seed_index"] = sorted(seeds[r["engine"]]).index(r["seed"])
+    if not runs:
+        msg = "no successful run to draw: see failures.csv"
+        print(msg, file=sys.stderr)
+        for path in (a.pressure, a.contacts, a.phi_j):
+            plots.message_figure(path, msg)
+        return 0
     phis = [r["phi_j"] for r in runs if pd.notna(r["phi_j"])]
     phi_min = min(phis) - 0.06 if phis else None
     plots.pressure_vs_phi(runs, a.pressure, p_scale=a.p_scale, window=a.window, phi_min=phi_min)

@@ -1,33 +1,36 @@
-"""Run LAMMPS or LIGGGHTS on a case and leave the common-format files and run.json."""
+"""Run one engine on a case; the outcome (ok or failed) goes to OUT/run.json."""
 from __future__ import annotations
 
 import argparse
 import sys
 from pathlib import Path
 
-from workflows import engines, provenance
-from workflows.case import ConfigError, load_case
+from workflows import runner
+from workflows.case import ConfigError
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--engine", required=True, choices=["lammps", "liggghts"])
+    ap.add_argument("--engine", required=True, choices=["pysim", "lammps", "liggghts"])
     ap.add_argument("--case", required=True, type=Path)
     ap.add_argument("--data", required=True, type=Path)
     ap.add_argument("--out", required=True, type=Path)
-    ap.add_argument("--ranks", type=int, default=1)
+    ap.add_argument("--ranks", type=int, default=1, help="MPI ranks (LAMMPS, LIGGGHTS)")
+    ap.add_argument("--threads", type=int, default=1, help="Numba threads (pysim)")
     ap.add_argument("--timeout", type=float, default=3600.0)
     a = ap.parse_args(argv)
     try:
-        case = load_case(a.case)
-        summary = engines.run(a.engine, case, a.data, a.out, ranks=a.ranks, timeout=a.timeout)
-    except (ConfigError, engines.EngineError) as exc:
+        rec = runner.run(a.engine, a.case, a.data, a.out, ranks=a.ranks, threads=a.threads,
+                         timeout=a.timeout)
+    except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
-        return 2 if isinstance(exc, ConfigError) else 1
-    version = summary.pop("engine_version")
-    provenance.write(a.out / "run.json", provenance.record(a.engine, version, case, **summary))
-    print(f"{a.engine}: {summary['steps']} steps in {summary['wall_seconds']:.1f} s "
-          f"({summary['particle_steps_per_second'] / 1e6:.2f} M particle-steps/s)", file=sys.stderr)
+        return 2
+    if rec["status"] != "ok":
+        print(f"FAILED: {rec['error']}", file=sys.stderr)
+    else:
+        rate = rec.get("particle_steps_per_second", float("nan"))
+        print(f"{a.engine}: {rec.get('steps')} steps in {rec.get('wall_seconds', 0):.1f} s "
+              f"({rate / 1e6:.2f} M particle-steps/s)", file=sys.stderr)
     return 0
 
 

@@ -1,8 +1,9 @@
 """Join every run's observables: ``summary.csv`` (tidy), ``comparison.csv`` (engine
-pairs with verdicts)."""
+pairs with verdicts) and ``failures.csv`` (runs that produced no result)."""
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -12,12 +13,34 @@ from analysis.compare import compare
 from analysis.summary import TIDY_COLUMNS
 from pysim.io import atomic_write_text
 
+FAILURE_COLUMNS = ["study", "case", "engine", "seed", "error", "log", "run_dir"]
+
+
+def failures(records: list[Path]) -> pd.DataFrame:
+    """One row per ``run.json`` whose status is not ``ok``; the run directory layout
+    ``<results>/<study>/<case>/seed<k>/<engine>/run.json`` names it."""
+    rows = []
+    for p in records:
+        rec = json.loads(Path(p).read_text())
+        if rec.get("status") == "ok":
+            continue
+        engine_dir = Path(p).parent
+        seed_dir = engine_dir.parent
+        err = rec.get("error", "unknown error")
+        log = err.rsplit("log: ", 1)[1] if "log: " in err else str(engine_dir / "log.txt")
+        rows.append({"study": seed_dir.parent.parent.name, "case": seed_dir.parent.name,
+                     "engine": engine_dir.name, "seed": int(seed_dir.name.removeprefix("seed")),
+                     "error": err, "log": log, "run_dir": str(engine_dir)})
+    return pd.DataFrame(rows, columns=FAILURE_COLUMNS)
+
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--summary", required=True, type=Path)
     ap.add_argument("--comparison", required=True, type=Path)
-    ap.add_argument("observables", nargs="+", type=Path)
+    ap.add_argument("--failures", required=True, type=Path)
+    ap.add_argument("--records", nargs="+", type=Path, required=True)
+    ap.add_argument("--observables", nargs="+", type=Path, required=True)
     a = ap.parse_args(argv)
     df = pd.concat([pd.read_csv(p) for p in a.observables], ignore_index=True)
     extra = [c for c in df.columns if c not in TIDY_COLUMNS]
@@ -25,9 +48,13 @@ def main(argv=None) -> int:
     atomic_write_text(a.summary, df.to_csv(index=False))
     cmp = compare(df)
     atomic_write_text(a.comparison, cmp.to_csv(index=False))
+    fail = failures(a.records)
+    atomic_write_text(a.failures, fail.to_csv(index=False))
     for _, r in cmp.iterrows():
         print(f"{r.study}/{r.case} {r.observable}: {r.engine_a} {r.mean_a:.4f} vs {r.engine_b} "
               f"{r.mean_b:.4f} -> {r.verdict}", file=sys.stderr)
+    for _, r in fail.iterrows():
+        print(f"FAILED {r.study}/{r.case}/seed{r.seed}/{r.engine}: {r.error}", file=sys.stderr)
     return 0
 
 

@@ -1,0 +1,61 @@
+"""Sanity checks of a finished run, the same for every engine.
+
+A run that wrote its files can still have blown up: NaN in the thermo table, kinetic
+energy running away, or particles driven through each other. :func:`check_run` reads
+the common format and returns a one-line description of the first such problem (step
+and particles), or ``None``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from analysis.io import read_contact_frames, read_thermo
+
+#: overlap, as a fraction of the mean diameter, that no sane packing reaches
+MAX_OVERLAP = 0.25
+
+
+def _contact_energy(case: dict, overlap: float, d: float) -> float:
+    c = case["contact"]
+    if c["law"] == "hertz":
+        return 0.4 * c["k_n"] * overlap**2.5
+    if c["law"] == "harmonic":
+        return 0.5 * c["k_n"] * (overlap / d) ** 2
+    return 0.5 * c["k_n"] * overlap**2
+
+
+def check_run(run_dir, case: dict, max_overlap: float = MAX_OVERLAP) -> str | None:
+    """First sign of a blow-up in a run directory, or ``None``.
+
+    * any non-finite value in ``thermo.dat``;
+    * kinetic energy per particle above the elastic energy of one contact overlapping by
+      ``max_overlap`` diameters (a packing never stores that much motion);
+    * any contact in ``contacts.dump`` overlapping by more than ``max_overlap`` mean
+      diameters.
+    """
+    from pathlib import Path
+
+    run_dir = Path(run_dir)
+    th = read_thermo(run_dir / "thermo.dat")
+    cols = ["time", "phi", "pressure", "ke", "n_contacts"]
+    values = th[cols].apply(lambda c: c.astype(np.float64)).to_numpy() if len(th) else np.zeros((0, 5))
+    bad = ~np.isfinite(values).all(axis=1)
+    if bad.any():
+        row = th[bad].iloc[0]
+        return f"non-finite thermo values at step {int(row.step)}"
+    d = case["particles"]["diameter"]["mean"]
+    n = case["particles"]["n"]
+    ke_max = n * _contact_energy(case, max_overlap * d, d)
+    runaway = th.ke > ke_max
+    if runaway.any():
+        row = th[runaway].iloc[0]
+        return (f"runaway kinetic energy {row.ke:.3g} (> {ke_max:.3g}, the energy of every "
+                f"particle in a contact overlapping {max_overlap} D) at step {int(row.step)}")
+    for c in read_contact_frames(run_dir / "contacts.dump"):
+        if c.n == 0:
+            continue
+        k = int(np.argmax(c.overlap))
+        if c.overlap[k] > max_overlap * d:
+            return (f"overlap {c.overlap[k] / d:.3g} D between particles {c.i[k]} and {c.j[k]} "
+                    f"at step {c.step} (limit {max_overlap} D)")
+    return None

@@ -1,0 +1,103 @@
+"""Run one case on one engine and record the outcome, success or failure, in run.json.
+
+Every engine run of the pipeline goes through :func:`run`. A run that succeeds leaves the
+common format (``docs/formats.md``) and a ``run.json`` with ``status: ok`` and its
+provenance. A run that fails — the engine stops with an error, runs past its time
+budget, loses atoms, or blows up (:func:`workflows.checks.check_run`) — leaves a
+``run.json`` with ``status: failed``, the engine's own error line and the path of its
+log, and *no* common-format files (they are moved to ``failed/``), so nothing
+half-written can be read as a result. The pipeline carries on with the other runs and
+the report lists the failed ones.
+
+pysim runs resume from their last checkpoint when one is present (a killed pipeline
+re-run picks up where it stopped).
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from workflows import checks, engines, provenance
+from workflows.case import load_case
+
+COMMON = ("particles.dump", "contacts.dump", "thermo.dat")
+#: keys of a provenance record that the runner writes itself
+PROVENANCE_KEYS = ("engine", "engine_version", "case_hash", "seed", "git_revision", "host",
+                   "python", "finished_at", "pid", "status")
+
+
+class RunFailure(RuntimeError):
+    """A run did not produce a valid result; the message is one line."""
+
+
+def _pysim(case_path: Path, data: Path, out: Path, threads: int, timeout: float) -> dict:
+    import pysim
+
+    cmd = [sys.executable, "-m", "pysim", "run", str(case_path), "--data", str(data), "--out",
+           str(out), "--no-progress"]
+    if (out / "checkpoint.npz").exists():
+        cmd.append("--resume")
+    log = out / "pysim.log"
+    env = dict(os.environ, NUMBA_NUM_THREADS=str(threads))
+    with open(log, "w") as fh:
+        try:
+            proc = subprocess.run(cmd, stdout=fh, stderr=subprocess.STDOUT, timeout=timeout, env=env)
+        except subprocess.TimeoutExpired:
+            raise RunFailure(f"pysim ran past its budget of {timeout:g} s; log: {log}") from None
+    text = log.read_text(errors="replace")
+    if proc.returncode != 0:
+        errs = [ln for ln in text.splitlines() if ln.startswith("error:")]
+        line = errs[-1][len("error:"):].strip() if errs else (text.strip().splitlines() or ["no output"])[-1]
+        raise RunFailure(f"pysim failed (exit {proc.returncode}): {line}; log: {log}")
+    rec = json.loads((out / "run.json").read_text())
+    keep = {k: v for k, v in rec.items() if k not in PROVENANCE_KEYS}
+    keep["engine_version"] = pysim.__version__
+    keep["command"] = cmd
+    return keep
+
+
+def run(engine: str, case_path, data, out, ranks: int = 1, threads: int = 1,
+        timeout: float = 3600.0) -> dict:
+    """Run ``engine`` on the case file ``case_path`` from ``data`` into ``out``; returns
+    the record written to ``out/run.json`` (``status`` is ``ok`` or ``failed``)."""
+    case_path, data, out = Path(case_path), Path(data), Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    case = load_case(case_path)
+    t0 = time.perf_counter()
+    version = "unknown"
+    try:
+        if engine == "pysim":
+            summary = _pysim(case_path, data, out, threads, timeout)
+        else:
+            summary = engines.run(engine, case, data, out, ranks=ranks, timeout=timeout)
+        version = summary.pop("engine_version", version)
+        problem = checks.check_run(out, case)
+        if problem:
+            raise RunFailure(f"{engine} blew up: {problem}")
+        rec = provenance.record(engine, version, case, **{**summary, "status": "ok"})
+    except Exception as exc:  # noqa: BLE001 - every failure becomes a reported result
+        if not isinstance(exc, (engines.EngineError, RunFailure)):
+            import traceback
+
+            traceback.print_exc()  # to the rule's log: this is a rodpack bug, not the engine's
+            exc = RunFailure(f"internal error while checking the {engine} run: "
+                             f"{type(exc).__name__}: {exc}")
+        failed = out / "failed"
+        failed.mkdir(exist_ok=True)
+        for name in COMMON:
+            if (out / name).exists():
+                os.replace(out / name, failed / name)
+        rec = provenance.record(engine, version, case, status="failed", error=str(exc),
+                                wall_seconds=time.perf_counter() - t0)
+    provenance.write(out / "run.json", rec)
+    return rec
+
+
+def clear_failed(out) -> None:
+    """Remove what a failed attempt left (before a retry)."""
+    shutil.rmtree(Path(out) / "failed", ignore_errors=True)
