@@ -12,6 +12,7 @@ import copy
 import hashlib
 import json
 import math
+import os
 import re
 import shutil
 from dataclasses import dataclass
@@ -24,6 +25,8 @@ SCHEMA_DIR = Path(__file__).resolve().parent / "schemas"
 ENGINES = ("pysim", "lammps", "liggghts")
 #: RSA saturates near 0.38 for spheres; insertion is refused above this
 PHI_INSERT_MAX = 0.35
+#: memory per particle (or glued sphere) of a run and its analysis, bytes
+BYTES_PER_PARTICLE = 2048
 #: random sequential addition of disks saturates near 0.547
 PHI_INSERT_MAX_2D = 0.5
 #: time step must stay below this fraction of the binary contact time
@@ -151,8 +154,9 @@ def _raise_first(errors, source: str, prefix=()):
     if e.validator == "required":
         missing = [k for k in e.validator_value if k not in e.instance]
         raise ConfigError(f"{source}: missing key '{_key(path + missing[:1])}'")
-    if e.validator == "propertyNames":
-        raise ConfigError(f"{source}: bad name under '{_key(path)}': {e.message}")
+    if "propertyNames" in e.relative_schema_path:
+        raise ConfigError(f"{source}: {_key(path)}: name {e.instance!r} is not allowed; use "
+                          f"{_allowed(e)}")
     raise ConfigError(f"{source}: {_key(path)} = {e.instance!r} is not allowed; use {_allowed(e)}")
 
 
@@ -189,6 +193,14 @@ def validate_case(case: dict, source: str = "case", prefix=()) -> dict:
                  tuple(prefix) + ("protocol",))
     _check_case(case, source, ".".join(map(str, prefix)) + "." if prefix else "")
     return case
+
+
+def physical_memory() -> int:
+    """Bytes of physical memory of this machine (0 if unknown)."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return 0
 
 
 def size_extremes(diameter: dict) -> tuple[float, float, float]:
@@ -259,6 +271,14 @@ def _check_case(case: dict, source: str, at: str):
                 f"{source}: {at}protocol.dt = {pr['dt']} is above {DT_MAX_FRACTION} of the "
                 f"contact time t_c = {t_c:.3g}; use dt <= {DT_MAX_FRACTION * t_c:.3g} "
                 "(t_c/50 is usual)")
+    # memory: about 2 KB per particle for pysim and the analysis, per glued sphere for the
+    # peers' rods (a rod of aspect ratio alpha is about 4 alpha + 1 spheres)
+    need = p["n"] * BYTES_PER_PARTICLE * (4 * alpha + 1)
+    have = physical_memory()
+    if have and need > have:
+        raise ConfigError(
+            f"{source}: {at}particles.n = {p['n']} needs about {need / 2**30:.1f} GiB, more than "
+            f"this machine's {have / 2**30:.1f} GiB; use fewer particles")
     # the periodic box at the end must hold the longest particle plus skin twice
     vol = p["n"] * particle_measure(dmean, alpha, dim)
     side = (vol / phi_end) ** (1 / dim)
@@ -334,8 +354,27 @@ def validate_config(config: dict, source: str = "config") -> dict:
                 prefix = ("studies", name, "variants", vname) if "variants" in study else \
                     ("studies", name, "case")
                 cases[(name, vname, seed)] = validate_case(merged, source, prefix)
+    _check_engines(config, source)
     config["_cases"] = cases
     return config
+
+
+def _check_engines(config: dict, source: str):
+    """Requested engines must be runnable: LAMMPS comes with the environment (its absence
+    is a broken set-up); LIGGGHTS may be missing (its runs are skipped with a message)
+    unless ``engines.liggghts.required`` is true."""
+    requested = {e for s in config["studies"].values() for e in s["engines"]}
+    if "lammps" in requested:
+        from workflows.engines import EngineError, venv_bin
+
+        try:
+            venv_bin("lmp")
+        except EngineError as exc:
+            raise ConfigError(f"{source}: engine 'lammps' is requested but {exc}") from None
+    lig = config.get("engines", {}).get("liggghts", {})
+    if "liggghts" in requested and lig.get("required") and not engine_available("liggghts"):
+        raise ConfigError(f"{source}: engines.liggghts.required is true but the 'liggghts' binary "
+                          "is not installed (as root: make liggghts, or apt-get install liggghts)")
 
 
 def load_config(path) -> dict:

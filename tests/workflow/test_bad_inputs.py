@@ -1,0 +1,174 @@
+"""Every bad case gets the same treatment: validation before anything runs, a one-line
+error that names the file, the key, the bad value and what is allowed, exit status 2,
+no traceback, and nothing written."""
+import copy
+import subprocess
+import sys
+
+import pytest
+import yaml
+
+from workflows.case import ConfigError, validate_case, validate_config
+
+GOOD = {
+    "particles": {"n": 500, "diameter": {"distribution": "mono", "mean": 1.0}},
+    "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 100.0, "gamma_bg": 1.0},
+    "protocol": {"name": "compress", "phi_init": 0.3, "rate": 0.005, "phi_final": 0.7, "dt": 1e-4},
+    "seed": 1,
+}
+DROP = object()
+
+# (path, bad value, the message after "<file>: ")
+CASES = [
+    (("particles", "n"), 0, "particles.n = 0 is not allowed; use a number >= 2 and <= 20000000"),
+    (("particles", "n"), -3, "particles.n = -3 is not allowed; use a number >= 2 and <= 20000000"),
+    (("particles", "n"), 2.5, "particles.n = 2.5 is not allowed; use a value of type integer"),
+    (("particles", "n"), "many", "particles.n = 'many' is not allowed; use a value of type integer"),
+    (("particles", "n"), 10, "particles.n = 10 is too small for a periodic box at packing fraction "
+                             "0.7 (side 1.96 < twice the particle length plus skin); use n >= 19"),
+    (("particles", "diameter", "mean"), 0,
+     "particles.diameter.mean = 0 is not allowed; use a number > 0"),
+    (("particles", "diameter", "mean"), -1.0,
+     "particles.diameter.mean = -1.0 is not allowed; use a number > 0"),
+    (("particles", "diameter", "distribution"), "gauss",
+     "particles.diameter.distribution = 'gauss' is not allowed; use one of 'mono', 'lognormal', "
+     "'bidisperse'"),
+    (("particles", "diameter", "sigma"), 0.2,
+     "particles.diameter.sigma = 0.2 needs distribution: lognormal (mono diameters have sigma 0)"),
+    (("particles", "diameter", "sigma"), 1.5,
+     "particles.diameter.sigma = 1.5 is not allowed; use a number >= 0 and <= 1"),
+    (("particles", "aspect_ratio"), -1.0,
+     "particles.aspect_ratio = -1.0 is not allowed; use a number >= 0 and <= 100"),
+    (("particles", "dimension"), 4, "particles.dimension = 4 is not allowed; use one of 2, 3"),
+    (("particles", "density"), 0, "particles.density = 0 is not allowed; use a number > 0"),
+    (("particles", "glued_spacing"), 0,
+     "particles.glued_spacing = 0 is not allowed; use a number > 0 and <= 1"),
+    (("contact", "law"), "hook",
+     "contact.law = 'hook' is not allowed; use one of 'hooke', 'hertz', 'harmonic'"),
+    (("contact", "k_n"), 0, "contact.k_n = 0 is not allowed; use a number > 0"),
+    (("contact", "k_n"), DROP, "missing key 'contact.k_n'"),
+    (("contact", "gamma_n"), -1, "contact.gamma_n = -1 is not allowed; use a number >= 0"),
+    (("contact", "friction"), 0.5, "contact.k_t = 0.0 must be > 0 when friction = 0.5 > 0"),
+    (("contact", "friction"), -0.1,
+     "contact.friction = -0.1 is not allowed; use a number >= 0 and <= 10"),
+    (("contact", "stiffness"), 5,
+     "unknown key 'contact.stiffness'; allowed here: friction, gamma_bg, gamma_n, gamma_rot, "
+     "gamma_t, k_n, k_t, law"),
+    (("protocol", "name"), "shake",
+     "protocol.name = 'shake' is not allowed; use one of 'compress', 'growth'"),
+    (("protocol", "name"), DROP, "missing key 'protocol.name'"),
+    (("protocol", "phi_init"), 0.5, "protocol.phi_init = 0.5 cannot be reached by random "
+                                    "insertion in 3-D; use a value <= 0.35 and compress"),
+    (("protocol", "phi_init"), 0, "protocol.phi_init = 0 is not allowed; use a number > 0 and < 1"),
+    (("protocol", "phi_final"), 1.2,
+     "protocol.phi_final = 1.2 is not allowed; use a number > 0 and < 1"),
+    (("protocol", "phi_final"), 0.2, "protocol.phi_final = 0.2 must be above phi_init = 0.3"),
+    (("protocol", "dt"), 1e-2, "protocol.dt = 0.01 is above 0.1 of the contact time t_c = "
+                               "0.00534; use dt <= 0.000534 (t_c/50 is usual)"),
+    (("protocol", "dt"), 0, "protocol.dt = 0 is not allowed; use a number > 0"),
+    (("protocol", "rate"), -0.1, "protocol.rate = -0.1 is not allowed; use a number > 0"),
+    (("protocol", "phi_fast"), 0.5,
+     "protocol: phi_fast and rate_fast go together; give both or neither"),
+    (("protocol", "phi_fnial"), 0.7,
+     "unknown key 'protocol.phi_fnial'; allowed here: dt, name, phi_fast, phi_final, phi_init, "
+     "pressure_final, rate, rate_fast"),
+    (("seed",), -1, "seed = -1 is not allowed; use a number >= 0"),
+    (("seed",), DROP, "missing key 'seed'"),
+    (("output",), {"dump_every": 0}, "output.dump_every = 0 is not allowed; use a number >= 1"),
+    (("output",), {"thermo_every": "often"},
+     "output.thermo_every = 'often' is not allowed; use a value of type integer"),
+    (("extra",), 1,
+     "unknown key 'extra'; allowed here: contact, output, particles, protocol, seed"),
+]
+
+
+def mutate(path, value):
+    case = copy.deepcopy(GOOD)
+    d = case
+    for k in path[:-1]:
+        d = d[k]
+    if value is DROP:
+        del d[path[-1]]
+    else:
+        d[path[-1]] = value
+    return case
+
+
+def test_there_are_at_least_thirty():
+    assert len(CASES) >= 30
+
+
+@pytest.mark.parametrize("path, value, message", CASES, ids=[".".join(c[0]) + f"={c[1]!r}" for c in CASES])
+def test_case_validation_message(path, value, message):
+    with pytest.raises(ConfigError) as exc:
+        validate_case(mutate(path, value), "case.yaml")
+    assert str(exc.value) == f"case.yaml: {message}"
+
+
+def test_too_many_particles_for_memory():
+    with pytest.raises(ConfigError, match=r"^case.yaml: particles.n = 20000000 needs about 38.1 "
+                                          r"GiB, more than this machine's [0-9.]+ GiB; use fewer "
+                                          r"particles$"):
+        validate_case(mutate(("particles", "n"), 20_000_000), "case.yaml")
+
+
+@pytest.mark.parametrize("path, value, message", CASES[::3], ids=[".".join(c[0]) for c in CASES[::3]])
+def test_cli_exit_2_one_line_nothing_written(tmp_path, path, value, message):
+    cp = tmp_path / "case.yaml"
+    cp.write_text(yaml.safe_dump(mutate(path, value)))
+    for cmd in (["run", str(cp), "--out", str(tmp_path / "out")],
+                ["init", str(cp), "--out", str(tmp_path / "init.data")]):
+        r = subprocess.run([sys.executable, "-m", "pysim", *cmd], capture_output=True, text=True)
+        assert r.returncode == 2
+        assert r.stderr == f"error: {cp}: {message}\n"
+        assert r.stdout == ""
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["case.yaml"]
+
+
+def test_not_yaml_and_missing_file(tmp_path):
+    bad = tmp_path / "case.yaml"
+    bad.write_text("particles: [1, 2\n")
+    r = subprocess.run([sys.executable, "-m", "pysim", "run", str(bad), "--out", str(tmp_path / "o")],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and r.stderr.startswith(f"error: {bad}:") and "not valid YAML" in r.stderr
+    assert r.stderr.count("\n") == 1
+    missing = tmp_path / "nope.yaml"
+    r = subprocess.run([sys.executable, "-m", "pysim", "run", str(missing), "--out", str(tmp_path / "o")],
+                       capture_output=True, text=True)
+    assert (r.returncode, r.stderr) == (2, f"error: {missing}: no such file\n")
+    assert not (tmp_path / "o").exists()
+
+
+CONFIG_CASES = [
+    ({"studies": {}}, "studies = {} is not allowed; use at least 1 entries"),
+    ({"studies": {"s": {"engines": [], "seeds": [1], "case": {}}}},
+     "studies.s.engines = [] is not allowed; use a list with min 1 items"),
+    ({"studies": {"s": {"engines": ["gromacs"], "seeds": [1], "case": {}}}},
+     "studies.s.engines.0 = 'gromacs' is not allowed; use one of 'pysim', 'lammps', 'liggghts'"),
+    ({"studies": {"s": {"engines": ["pysim"], "seeds": [], "case": {}}}},
+     "studies.s.seeds = [] is not allowed; use a list with min 1 items"),
+    ({"studies": {"Bad-Name": {"engines": ["pysim"], "seeds": [1], "case": {}}}},
+     "studies: name 'Bad-Name' is not allowed; use a name matching ^[a-z][a-z0-9_]*$"),
+    ({"studies": {"s": {"engines": ["pysim"], "seeds": [1], "case": {}, "variant": {}}}},
+     "unknown key 'studies.s.variant'; allowed here: analysis, case, description, engines, "
+     "seeds, variants"),
+    ({"engines": {"lammps": {"ranks": 0}}, "studies": {"s": {"engines": ["pysim"], "seeds": [1],
+                                                            "case": {}}}},
+     "engines.lammps.ranks = 0 is not allowed; use a number >= 1"),
+]
+
+
+@pytest.mark.parametrize("config, message", CONFIG_CASES)
+def test_config_validation_message(config, message):
+    with pytest.raises(ConfigError) as exc:
+        validate_config(config, "cfg.yaml")
+    assert str(exc.value) == f"cfg.yaml: {message}"
+
+
+def test_variant_errors_name_the_variant():
+    study = {"engines": ["pysim"], "seeds": [1], "case": {k: v for k, v in GOOD.items() if k != "seed"},
+             "variants": {"fast": {"protocol": {"rate": -1}}}}
+    with pytest.raises(ConfigError) as exc:
+        validate_config({"studies": {"s": study}}, "cfg.yaml")
+    assert str(exc.value) == ("cfg.yaml: studies.s.variants.fast.protocol.rate = -1 is not "
+                              "allowed; use a number > 0")
