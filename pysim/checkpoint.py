@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pysim.integrators import RODS, SYS_SIZE
 from pysim.simulation import ContactModel, Simulation
 from pysim.state import State
 
@@ -23,7 +24,9 @@ FORMAT = 1
 _STATE_ARRAYS = ("x", "v", "q", "u", "omega", "radius", "length", "mass", "inertia", "box",
                  "periodic")
 _SIM_ARRAYS = ("half", "r_int", "f", "torque", "virial", "pi", "pj", "hist", "x_ref",
-               "box_ref", "whist", "wall_force", "sys", "planes", "cyls")
+               "u_ref", "box_ref", "whist", "wall_force", "sys", "planes", "cyls")
+#: arrays that checkpoints of earlier versions may lack (rebuilt on load)
+_OPTIONAL = ("u_ref",)
 
 
 def save(sim: Simulation, path, extra: dict | None = None) -> Path:
@@ -69,8 +72,12 @@ def load(path) -> tuple[Simulation, dict]:
         sim = Simulation.__new__(Simulation)
         sim.state = state
         sim.model = ContactModel(**meta["model"])
+        missing = [k for k in _SIM_ARRAYS if f"sim_{k}" not in data.files]
+        if set(missing) - set(_OPTIONAL):
+            raise ValueError(f"{path}: checkpoint lacks {missing}")
         for k in _SIM_ARRAYS:
-            setattr(sim, k, data[f"sim_{k}"].copy())
+            if k not in missing:
+                setattr(sim, k, data[f"sim_{k}"].copy())
     m = meta["sim"]
     sim._dt, sim._t_seg, sim._s_seg = m["dt"], m["t_seg"], m["s_seg"]
     sim.skin, sim.max_overlap = m["skin"], m["max_overlap"]
@@ -79,4 +86,15 @@ def load(path) -> tuple[Simulation, dict]:
     sim._cp = sim.model.pair_params()
     sim._wp = sim.model.wall_params()
     sim._wfriction = sim._wp[4] > 0
+    sim._index_pairs()
+    if missing or len(sim.sys) < SYS_SIZE:
+        # an earlier version's checkpoint: complete sys and start a fresh pair list (the
+        # forces do not depend on the list, so the run continues unchanged)
+        sys = np.zeros(SYS_SIZE)
+        sys[:len(sim.sys)] = sim.sys
+        sys[RODS] = 1.0 if np.any(sim.half > 0) else 0.0
+        sim.sys = sys
+        sim.u_ref = state.u.copy() if sys[RODS] else np.zeros((0, 3))
+        sim._rebuild()
+        sim.rebuilds -= 1
     return sim, meta["extra"]

@@ -1,11 +1,27 @@
 """The contact loop: forces, torques, virial and the contact table from the pairs.
 
-One loop serves every particle shape (spheres are spherocylinders with ``L = 0``), every
-normal law, friction and cohesion, for force evaluation (every step) and for the
-contact table written with each dump (``record=True``). Pairs are visited in list order
-(sorted by ``i`` then ``j``) and pairs out of contact add nothing, so the forces do not
-depend on how many extra pairs the Verlet list holds: results are bit-identical
-across list rebuilds and restarts.
+Two small scalar functions hold the physics of a pair for every particle shape
+(spheres are spherocylinders with ``L = 0``), every normal law, friction and cohesion:
+:func:`spine_gap` (closest points) and :func:`pair_force` (the laws of
+:mod:`pysim.forces`). They take and return scalars only, so that the hot loops pass no
+arrays to them (an array argument costs atomic reference-count updates per call). Two
+loops call them:
+
+* :func:`pair_pass` + :func:`reduce_pass`, the force evaluation of every step, on any
+  number of threads. ``pair_pass`` walks the rows of the pair list (particle ``i``
+  owns its pairs ``(i, j > i)`` and their tangential springs ``hist``), sums the forces
+  and torques on ``i`` in row order and stores the reaction on ``j`` per pair (``fj``);
+  ``reduce_pass`` then adds to each particle ``p`` the reactions of the pairs in which
+  it is the second member, in pair order. Global sums (elastic energy, contacts,
+  virial) are taken per fixed block of rows and the block sums added in block order.
+  Nothing depends on how rows are shared among threads, so 1 and 2 threads give the
+  same bits.
+* :func:`pair_forces`, a plain serial loop in pair order that can also record the
+  contact table (used with each dump, and by the tests).
+
+Pairs out of contact add nothing and every pair's contribution is a pure function of
+its two particles, so forces do not depend on how many extra pairs the Verlet list
+holds: results are bit-identical across list rebuilds and restarts.
 
 Geometry (science.md section 2): closest points ``p_i = x_i + s u_i`` and
 ``p_j = x_j + t u_j`` of the spines (:func:`pysim.geometry.closest_params`), distance
@@ -16,108 +32,304 @@ from __future__ import annotations
 
 import numpy as np
 
-from pysim.forces import D_COH, cohesion_force, elastic_energy, normal_force, tangential_force
+from pysim.forces import (D_COH, F_COH, GAMMA_N, GAMMA_T, K_N, K_T, MU, cohesion_force,
+                          elastic_energy, normal_force, tangential_force)
 from pysim.geometry import closest_params
-from pysim.jit import njit
+from pysim.jit import njit, pnjit, prange
 
 #: columns of a recorded contact: point (3), normal (3), overlap, force on i (3)
 REC_COLUMNS = 10
+#: columns of the per-pair reaction ``fj``: force on j (3), torque on j (3)
+FJ_COLUMNS = 6
+#: rows per block of the parallel pair loop (fixed: results never depend on threads)
+BLOCK = 64
+#: columns of a block's partial sums: elastic energy, contacts, virial (9)
+_STATS = 11
+
+
+@njit
+def min_image(d0, d1, d2, b0, b1, b2, p0, p1, p2):
+    """Minimum image of the separation ``(d0, d1, d2)`` in a box ``b`` periodic along
+    the axes where ``p`` is True."""
+    if p0:
+        d0 -= b0 * np.floor(d0 / b0 + 0.5)
+    if p1:
+        d1 -= b1 * np.floor(d1 / b1 + 0.5)
+    if p2:
+        d2 -= b2 * np.floor(d2 / b2 + 0.5)
+    return d0, d1, d2
+
+
+@njit
+def spine_gap(d0, d1, d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj):
+    """Closest points of two spines, ``d = x_j - x_i``: returns ``a = p_i - x_i`` (3) and
+    the gap ``g = p_j - p_i`` (3) (science.md section 2)."""
+    s, t = closest_params(-d0, -d1, -d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj)
+    a0 = s * ui0
+    a1 = s * ui1
+    a2 = s * ui2
+    return a0, a1, a2, d0 + t * uj0 - a0, d1 + t * uj1 - a1, d2 + t * uj2 - a2
+
+
+@njit
+def pair_force(g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, ri, rj, vi0, vi1, vi2, wi0, wi1,
+               wi2, vj0, vj1, vj2, wj0, wj1, wj2, x0, x1, x2, law, kn, gn, kt, gt, mu, fcoh,
+               dcoh, friction, dt):
+    """Force of a pair within reach: gap ``g`` (``|g|^2 = dist2``), ``a = p_i - x_i``,
+    ``d = x_j - x_i``, radii, velocities and spins of both, tangential spring ``x``.
+
+    Contact-point velocity ``v_rel = (v_i + w_i x (c - x_i)) - (v_j + w_j x (c - x_j))``,
+    overlap rate ``v_rel . n``, normal force (when ``delta > 0``) plus cohesion,
+    tangential force with the spring when ``friction`` (reset to zero when not
+    touching); force on i ``F = -f_n n + F_t``, on j ``-F``.
+
+    Returns ``(F (3), c (3), e (3), n (3), delta, x (3))``: ``c`` and ``e`` the contact
+    point relative to ``x_i`` and ``x_j``, ``n`` the unit normal, ``x`` the new spring.
+    """
+    dist = np.sqrt(dist2)
+    inv = 1.0 / dist
+    n0 = g0 * inv
+    n1 = g1 * inv
+    n2 = g2 * inv
+    rs = ri + rj
+    delta = rs - dist
+    # contact point relative to x_i, and relative to x_j
+    ar = ri - 0.5 * delta
+    c0 = a0 + ar * n0
+    c1 = a1 + ar * n1
+    c2 = a2 + ar * n2
+    e0 = c0 - d0
+    e1 = c1 - d1
+    e2 = c2 - d2
+    # relative velocity of the contact points (i minus j)
+    vr0 = vi0 + (wi1 * c2 - wi2 * c1) - vj0 - (wj1 * e2 - wj2 * e1)
+    vr1 = vi1 + (wi2 * c0 - wi0 * c2) - vj1 - (wj2 * e0 - wj0 * e2)
+    vr2 = vi2 + (wi0 * c1 - wi1 * c0) - vj2 - (wj0 * e1 - wj1 * e0)
+    vn = vr0 * n0 + vr1 * n1 + vr2 * n2
+    fn = 0.0
+    if delta > 0.0:
+        fn = normal_force(law, kn, gn, delta, vn, rs)
+    if fcoh != 0.0:
+        fn += cohesion_force(fcoh, dcoh, delta)
+    ft0 = 0.0
+    ft1 = 0.0
+    ft2 = 0.0
+    if friction:
+        if delta > 0.0:
+            ft0, ft1, ft2, x0, x1, x2 = tangential_force(
+                kt, gt, mu, fn, x0, x1, x2, n0, n1, n2, vr0 - vn * n0, vr1 - vn * n1,
+                vr2 - vn * n2, dt)
+        else:
+            x0 = 0.0
+            x1 = 0.0
+            x2 = 0.0
+    return (-fn * n0 + ft0, -fn * n1 + ft1, -fn * n2 + ft2, c0, c1, c2, e0, e1, e2, n0, n1,
+            n2, delta, x0, x1, x2)
+
+
+@pnjit
+def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law, p,
+              friction, dt, rods, f, torque, fj, stats, virial):
+    """Forces and torques of every listed pair on its first particle, written to
+    ``f``/``torque`` (overwritten: row sums), and the reaction on the second particle
+    stored per pair in ``fj`` (force, torque; zero out of contact) for
+    :func:`reduce_pass`. ``rods`` False skips the spine geometry (all spheres). With
+    ``stats`` also the virial ``virial[a, b] = sum (x_j - x_i)_a F_b`` (overwritten), and
+    returns ``(elastic energy, contacts)``; otherwise ``(0.0, 0)``. Contacts are the pairs
+    that carry a force: touching (``delta > 0``) or, with cohesion, closer than ``d_c``."""
+    n = x.shape[0]
+    kn, gn, kt, gt, mu = p[K_N], p[GAMMA_N], p[K_T], p[GAMMA_T], p[MU]
+    fcoh, dcoh = p[F_COH], p[D_COH]
+    b0, b1, b2 = box[0], box[1], box[2]
+    p0, p1, p2 = periodic[0], periodic[1], periodic[2]
+    nb = (n + BLOCK - 1) // BLOCK
+    blk = np.zeros((nb if stats else 0, _STATS))
+    for b in prange(nb):
+        for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
+            xi0, xi1, xi2 = x[i, 0], x[i, 1], x[i, 2]
+            ui0, ui1, ui2 = u[i, 0], u[i, 1], u[i, 2]
+            vi0, vi1, vi2 = v[i, 0], v[i, 1], v[i, 2]
+            wi0, wi1, wi2 = omega[i, 0], omega[i, 1], omega[i, 2]
+            ri = radius[i]
+            hi = half[i]
+            s0 = 0.0
+            s1 = 0.0
+            s2 = 0.0
+            q0 = 0.0
+            q1 = 0.0
+            q2 = 0.0
+            for k in range(istart[i], istart[i + 1]):
+                j = pj[k]
+                d0, d1, d2 = min_image(x[j, 0] - xi0, x[j, 1] - xi1, x[j, 2] - xi2, b0, b1, b2,
+                                       p0, p1, p2)
+                a0 = 0.0
+                a1 = 0.0
+                a2 = 0.0
+                g0, g1, g2 = d0, d1, d2
+                if rods:
+                    a0, a1, a2, g0, g1, g2 = spine_gap(d0, d1, d2, ui0, ui1, ui2, hi, u[j, 0],
+                                                       u[j, 1], u[j, 2], half[j])
+                dist2 = g0 * g0 + g1 * g1 + g2 * g2
+                rj = radius[j]
+                reach = ri + rj + dcoh
+                if dist2 >= reach * reach:
+                    if friction:
+                        hist[k, 0] = 0.0
+                        hist[k, 1] = 0.0
+                        hist[k, 2] = 0.0
+                    for c in range(FJ_COLUMNS):
+                        fj[k, c] = 0.0
+                    continue
+                h0 = 0.0
+                h1 = 0.0
+                h2 = 0.0
+                if friction:
+                    h0, h1, h2 = hist[k, 0], hist[k, 1], hist[k, 2]
+                (F0, F1, F2, c0, c1, c2, e0, e1, e2, n0, n1, n2, delta, h0, h1, h2) = pair_force(
+                    g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, ri, rj, vi0, vi1, vi2, wi0, wi1,
+                    wi2, v[j, 0], v[j, 1], v[j, 2], omega[j, 0], omega[j, 1], omega[j, 2], h0,
+                    h1, h2, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt)
+                if friction:
+                    hist[k, 0] = h0
+                    hist[k, 1] = h1
+                    hist[k, 2] = h2
+                s0 += F0
+                s1 += F1
+                s2 += F2
+                q0 += c1 * F2 - c2 * F1
+                q1 += c2 * F0 - c0 * F2
+                q2 += c0 * F1 - c1 * F0
+                fj[k, 0] = -F0
+                fj[k, 1] = -F1
+                fj[k, 2] = -F2
+                fj[k, 3] = -(e1 * F2 - e2 * F1)
+                fj[k, 4] = -(e2 * F0 - e0 * F2)
+                fj[k, 5] = -(e0 * F1 - e1 * F0)
+                if stats:
+                    if delta > 0.0:
+                        blk[b, 0] += elastic_energy(law, kn, delta, ri + rj)
+                    blk[b, 1] += 1.0
+                    blk[b, 2] += d0 * F0
+                    blk[b, 3] += d0 * F1
+                    blk[b, 4] += d0 * F2
+                    blk[b, 5] += d1 * F0
+                    blk[b, 6] += d1 * F1
+                    blk[b, 7] += d1 * F2
+                    blk[b, 8] += d2 * F0
+                    blk[b, 9] += d2 * F1
+                    blk[b, 10] += d2 * F2
+            f[i, 0] = s0
+            f[i, 1] = s1
+            f[i, 2] = s2
+            torque[i, 0] = q0
+            torque[i, 1] = q1
+            torque[i, 2] = q2
+    pe = 0.0
+    nc = 0
+    if stats:
+        tot = np.zeros(_STATS)
+        for b in range(nb):
+            for c in range(_STATS):
+                tot[c] += blk[b, c]
+        pe = tot[0]
+        nc = int(tot[1])
+        for a in range(3):
+            for c in range(3):
+                virial[a, c] = tot[2 + 3 * a + c]
+    return pe, nc
+
+
+@pnjit
+def reduce_pass(f, torque, jstart, jk, fj, v, omega, mass, gx, gy, gz, gamma_bg, gamma_rot,
+                body):
+    """Add to each particle the reactions of the pairs in which it is the second member
+    (in pair order), then, with ``body``, gravity ``m g`` and the drags ``-gamma_bg v``,
+    ``-gamma_rot omega``."""
+    for i in prange(f.shape[0]):
+        s0 = f[i, 0]
+        s1 = f[i, 1]
+        s2 = f[i, 2]
+        q0 = torque[i, 0]
+        q1 = torque[i, 1]
+        q2 = torque[i, 2]
+        for q in range(jstart[i], jstart[i + 1]):
+            k = jk[q]
+            s0 += fj[k, 0]
+            s1 += fj[k, 1]
+            s2 += fj[k, 2]
+            q0 += fj[k, 3]
+            q1 += fj[k, 4]
+            q2 += fj[k, 5]
+        if body:
+            s0 += mass[i] * gx - gamma_bg * v[i, 0]
+            s1 += mass[i] * gy - gamma_bg * v[i, 1]
+            s2 += mass[i] * gz - gamma_bg * v[i, 2]
+            q0 -= gamma_rot * omega[i, 0]
+            q1 -= gamma_rot * omega[i, 1]
+            q2 -= gamma_rot * omega[i, 2]
+        f[i, 0] = s0
+        f[i, 1] = s1
+        f[i, 2] = s2
+        torque[i, 0] = q0
+        torque[i, 1] = q1
+        torque[i, 2] = q2
 
 
 @njit
 def pair_forces(x, v, omega, u, radius, half, box, periodic, pi, pj, hist, law, p,
                 friction, dt, f, torque, virial, record, rec_ij, rec):
-    """Add pair contact forces and torques to ``f``/``torque``, the virial to ``virial``.
-
-    For each listed pair with ``delta > -d_c`` (touching, or within the cohesion range):
-    contact-point velocity ``v_rel = (v_i + w_i x (c - x_i)) - (v_j + w_j x (c - x_j))``,
-    overlap rate ``v_rel . n``, normal force from :func:`pysim.forces.normal_force`
-    (when ``delta > 0``) plus cohesion, tangential force with history ``hist[pair]``
-    when ``friction``; force on i ``F = -f_n n + F_t``, on j ``-F``; torques
-    ``(c - x_i) x F`` and ``(c - x_j) x (-F)``. ``virial[a, b] += (x_j - x_i)_a F_b``
-    (= the contact sum of ``l_a F_b`` over both particles). The history of pairs out of
-    contact is reset to zero.
+    """Serial form: add pair contact forces and torques to ``f``/``torque`` and the
+    virial to ``virial``, visiting pairs in list order (``hist`` (npairs, 3) with
+    friction); with ``record`` store the contacts in ``rec_ij``/``rec`` (see
+    :data:`REC_COLUMNS`; the point is absolute and may lie just outside the box).
 
     Returns ``(elastic energy, number of contacts)``: contacts are the pairs that carry
-    a force, touching (``delta > 0``) or, with cohesion, closer than ``d_c``
-    (``delta > -d_c``). With ``record`` they are stored in ``rec_ij``/``rec`` (see
-    :data:`REC_COLUMNS`; the point is absolute and may lie just outside the box).
+    a force, touching (``delta > 0``) or, with cohesion, closer than ``d_c``.
     """
+    kn, gn, kt, gt, mu = p[K_N], p[GAMMA_N], p[K_T], p[GAMMA_T], p[MU]
+    fcoh, dcoh = p[F_COH], p[D_COH]
     pe = 0.0
     nc = 0
-    dcoh = p[D_COH]
+    rods = False
+    for k in range(half.shape[0]):
+        if half[k] > 0.0:
+            rods = True
     for k in range(pi.shape[0]):
         i = pi[k]
         j = pj[k]
-        d0 = x[j, 0] - x[i, 0]
-        d1 = x[j, 1] - x[i, 1]
-        d2 = x[j, 2] - x[i, 2]
-        if periodic[0]:
-            d0 -= box[0] * np.floor(d0 / box[0] + 0.5)
-        if periodic[1]:
-            d1 -= box[1] * np.floor(d1 / box[1] + 0.5)
-        if periodic[2]:
-            d2 -= box[2] * np.floor(d2 / box[2] + 0.5)
-        hi_ = half[i]
-        hj_ = half[j]
-        s, t = closest_params(-d0, -d1, -d2, u[i, 0], u[i, 1], u[i, 2], hi_,
-                              u[j, 0], u[j, 1], u[j, 2], hj_)
-        # p_i and p_j relative to x_i
-        a0 = s * u[i, 0]
-        a1 = s * u[i, 1]
-        a2 = s * u[i, 2]
-        g0 = d0 + t * u[j, 0] - a0
-        g1 = d1 + t * u[j, 1] - a1
-        g2 = d2 + t * u[j, 2] - a2
+        d0, d1, d2 = min_image(x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2],
+                               box[0], box[1], box[2], periodic[0], periodic[1], periodic[2])
+        a0 = 0.0
+        a1 = 0.0
+        a2 = 0.0
+        g0, g1, g2 = d0, d1, d2
+        if rods:
+            a0, a1, a2, g0, g1, g2 = spine_gap(d0, d1, d2, u[i, 0], u[i, 1], u[i, 2], half[i],
+                                               u[j, 0], u[j, 1], u[j, 2], half[j])
         dist2 = g0 * g0 + g1 * g1 + g2 * g2
-        rs = radius[i] + radius[j]
-        reach = rs + dcoh
+        reach = radius[i] + radius[j] + dcoh
         if dist2 >= reach * reach:
             if friction:
                 hist[k, 0] = 0.0
                 hist[k, 1] = 0.0
                 hist[k, 2] = 0.0
             continue
-        dist = np.sqrt(dist2)
-        inv = 1.0 / dist
-        n0 = g0 * inv
-        n1 = g1 * inv
-        n2 = g2 * inv
-        delta = rs - dist
-        # contact point relative to x_i, and relative to x_j
-        ar = radius[i] - 0.5 * delta
-        c0 = a0 + ar * n0
-        c1 = a1 + ar * n1
-        c2 = a2 + ar * n2
-        e0 = c0 - d0
-        e1 = c1 - d1
-        e2 = c2 - d2
-        # relative velocity of the contact points (i minus j)
-        w0, w1, w2 = omega[i, 0], omega[i, 1], omega[i, 2]
-        z0, z1, z2 = omega[j, 0], omega[j, 1], omega[j, 2]
-        vr0 = v[i, 0] + (w1 * c2 - w2 * c1) - v[j, 0] - (z1 * e2 - z2 * e1)
-        vr1 = v[i, 1] + (w2 * c0 - w0 * c2) - v[j, 1] - (z2 * e0 - z0 * e2)
-        vr2 = v[i, 2] + (w0 * c1 - w1 * c0) - v[j, 2] - (z0 * e1 - z1 * e0)
-        vn = vr0 * n0 + vr1 * n1 + vr2 * n2
-        fn = 0.0
-        if delta > 0.0:
-            fn = normal_force(law, p, delta, vn, rs)
-            pe += elastic_energy(law, p, delta, rs)
-        fn += cohesion_force(p, delta)
-        ft0 = 0.0
-        ft1 = 0.0
-        ft2 = 0.0
+        h0 = 0.0
+        h1 = 0.0
+        h2 = 0.0
         if friction:
-            if delta > 0.0:
-                ft0, ft1, ft2 = tangential_force(p, fn, hist, k, n0, n1, n2, vr0 - vn * n0,
-                                                 vr1 - vn * n1, vr2 - vn * n2, dt)
-            else:
-                hist[k, 0] = 0.0
-                hist[k, 1] = 0.0
-                hist[k, 2] = 0.0
-        F0 = -fn * n0 + ft0
-        F1 = -fn * n1 + ft1
-        F2 = -fn * n2 + ft2
+            h0, h1, h2 = hist[k, 0], hist[k, 1], hist[k, 2]
+        (F0, F1, F2, c0, c1, c2, e0, e1, e2, n0, n1, n2, delta, h0, h1, h2) = pair_force(
+            g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, radius[i], radius[j], v[i, 0], v[i, 1],
+            v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2], v[j, 0], v[j, 1], v[j, 2],
+            omega[j, 0], omega[j, 1], omega[j, 2], h0, h1, h2, law, kn, gn, kt, gt, mu, fcoh,
+            dcoh, friction, dt)
+        if friction:
+            hist[k, 0] = h0
+            hist[k, 1] = h1
+            hist[k, 2] = h2
+        if delta > 0.0:
+            pe += elastic_energy(law, kn, delta, radius[i] + radius[j])
         f[i, 0] += F0
         f[i, 1] += F1
         f[i, 2] += F2
@@ -154,3 +366,40 @@ def pair_forces(x, v, omega, u, radius, half, box, periodic, pi, pj, hist, law, 
             rec[nc, 9] = F2
         nc += 1
     return pe, nc
+
+
+@pnjit
+def worst_overlap(x, u, radius, half, box, periodic, pi, pj, rods):
+    """The largest overlap as a fraction of the smaller diameter,
+    ``delta / (2 min(R_i, R_j))``, over the listed pairs, and the first pair where it
+    occurs: ``(fraction, k)`` (``(-inf, -1)`` when no pair touches). For the blow-up
+    check."""
+    m = pi.shape[0]
+    nb = (m + 4095) // 4096
+    best = np.full(nb, -np.inf)
+    where = np.full(nb, -1, np.int64)
+    for b in prange(nb):
+        for k in range(b * 4096, min(m, (b + 1) * 4096)):
+            i = pi[k]
+            j = pj[k]
+            d0, d1, d2 = min_image(x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2],
+                                   box[0], box[1], box[2], periodic[0], periodic[1],
+                                   periodic[2])
+            g0, g1, g2 = d0, d1, d2
+            if rods:
+                _, _, _, g0, g1, g2 = spine_gap(d0, d1, d2, u[i, 0], u[i, 1], u[i, 2], half[i],
+                                                u[j, 0], u[j, 1], u[j, 2], half[j])
+            delta = radius[i] + radius[j] - np.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
+            if delta <= 0.0:
+                continue
+            frac = delta / (2.0 * min(radius[i], radius[j]))
+            if frac > best[b]:
+                best[b] = frac
+                where[b] = k
+    fr = -np.inf
+    kk = -1
+    for b in range(nb):
+        if best[b] > fr:
+            fr = best[b]
+            kk = where[b]
+    return fr, kk

@@ -5,7 +5,10 @@ while approaching); a normal force magnitude is repulsive when positive. The for
 particle ``i`` is ``-f_n n + F_t`` with ``n`` the unit normal from ``i`` to ``j``.
 
 Parameters travel in one float array (indices below) so that kernels stay
-monomorphic and cacheable; laws are selected by an integer id.
+monomorphic and cacheable; laws are selected by an integer id. The laws themselves take
+scalars only (the contact loop unpacks the array once): a kernel helper that receives
+arrays updates their reference counts atomically on every call, which would cost more
+than the law itself.
 
 ==============  ==  ====================================================================
 law             id  normal force (science.md section 3)
@@ -43,53 +46,48 @@ def contact_params(k_n, gamma_n=0.0, k_t=0.0, gamma_t=0.0, mu=0.0, f_coh=0.0, d_
 
 
 @njit
-def normal_force(law, p, delta, ddelta, dsum):
+def normal_force(law, kn, gn, delta, ddelta, dsum):
     """Normal force magnitude for overlap ``delta``, overlap rate ``ddelta`` and
-    contact distance ``dsum = R_i + R_j`` (see the module table)."""
+    contact distance ``dsum = R_i + R_j`` (see the module table); ``kn``, ``gn`` the
+    stiffness and damping."""
     if law == HOOKE:
-        return p[K_N] * delta + p[GAMMA_N] * ddelta
+        return kn * delta + gn * ddelta
     if law == HERTZ:
-        return p[K_N] * delta * np.sqrt(delta) + p[GAMMA_N] * ddelta
-    return p[K_N] * delta / (dsum * dsum) + p[GAMMA_N] * ddelta
+        return kn * delta * np.sqrt(delta) + gn * ddelta
+    return kn * delta / (dsum * dsum) + gn * ddelta
 
 
 @njit
-def elastic_energy(law, p, delta, dsum):
+def elastic_energy(law, kn, delta, dsum):
     """Elastic energy of one contact: ``k delta^2/2``, ``2/5 k delta^(5/2)`` or
     ``k_e/2 (delta/d_ij)^2``."""
     if law == HOOKE:
-        return 0.5 * p[K_N] * delta * delta
+        return 0.5 * kn * delta * delta
     if law == HERTZ:
-        return 0.4 * p[K_N] * delta * delta * np.sqrt(delta)
+        return 0.4 * kn * delta * delta * np.sqrt(delta)
     x = delta / dsum
-    return 0.5 * p[K_N] * x * x
+    return 0.5 * kn * x * x
 
 
 @njit
-def cohesion_force(p, delta):
+def cohesion_force(f_coh, d_coh, delta):
     """Constant attraction ``F_c`` while the gap ``-delta`` is below ``d_c`` (science.md:
     cohesion of the deposits); returned as a (negative) normal force."""
-    if p[F_COH] != 0.0 and delta > -p[D_COH]:
-        return -p[F_COH]
+    if f_coh != 0.0 and delta > -d_coh:
+        return -f_coh
     return 0.0
 
 
 @njit
-def tangential_force(p, fn, hist, h, n0, n1, n2, vt0, vt1, vt2, dt):
+def tangential_force(kt, gt, mu, fn, x0, x1, x2, n0, n1, n2, vt0, vt1, vt2, dt):
     """Tangential spring with history and Coulomb cap (science.md section 3).
 
-    ``hist[h]`` is the tangential spring ``xi_t`` of this contact: it is first rotated
+    ``(x0, x1, x2)`` is the tangential spring ``xi_t`` of this contact: it is first rotated
     into the current tangent plane (keeping its length), then ``xi_t += v_t dt``,
     ``F_t = -k_t xi_t - gamma_t v_t``; if ``|F_t| > mu |f_n|`` the force is rescaled to
     ``mu |f_n|`` and the spring with it (``xi_t = -(F_t + gamma_t v_t)/k_t``).
-    Returns ``F_t`` (force on i).
+    Returns ``(F_t (3), new xi_t (3))`` (``F_t`` the force on i).
     """
-    kt = p[K_T]
-    gt = p[GAMMA_T]
-    mu = p[MU]
-    x0 = hist[h, 0]
-    x1 = hist[h, 1]
-    x2 = hist[h, 2]
     # rotate into the tangent plane, preserving the length
     xn = x0 * n0 + x1 * n1 + x2 * n2
     old = x0 * x0 + x1 * x1 + x2 * x2
@@ -120,7 +118,4 @@ def tangential_force(p, fn, hist, h, n0, n1, n2, vt0, vt1, vt2, dt):
             x0 = -(f0 + gt * vt0) / kt
             x1 = -(f1 + gt * vt1) / kt
             x2 = -(f2 + gt * vt2) / kt
-    hist[h, 0] = x0
-    hist[h, 1] = x1
-    hist[h, 2] = x2
-    return f0, f1, f2
+    return f0, f1, f2, x0, x1, x2

@@ -3,8 +3,14 @@
 All three share :func:`forces` (contacts, walls, gravity, drag) and
 :func:`maybe_rebuild` (the Verlet list). Arrays are those of :class:`pysim.state.State`
 plus ``half = L/2`` and ``r_int = R + L/2 + d_c/2`` (interaction radii), the pair list
-``(pi, pj)`` with its per-pair tangential springs ``hist``, and the wall arrays of
-:mod:`pysim.walls`. ``sys`` is a float array of the scalars below.
+:class:`Pairs` (:mod:`pysim.neighbors`) with its per-pair tangential springs ``hist``, and
+the wall arrays of :mod:`pysim.walls`. ``sys`` is a float array of the scalars below.
+
+Every per-particle loop and the contact loop run on Numba threads (``prange``); each
+thread writes only the particles or pairs it owns and global sums are taken over fixed
+blocks (:mod:`pysim.contacts`), so results do not depend on the number of threads.
+Spheres (``L = 0``) keep their orientation ``q``, ``u``: with equal principal moments it
+enters no force, torque or kinetic term (LAMMPS ``nve/sphere`` does not track it either).
 
 **Velocity Verlet** (``verlet_chunk``), step order as LAMMPS (``fix nve/sphere``,
 ``fix viscous``, ``fix deform ... remap x``):
@@ -31,15 +37,32 @@ from __future__ import annotations
 
 import numpy as np
 
-from pysim.contacts import REC_COLUMNS, pair_forces
-from pysim.jit import njit
-from pysim.neighbors import build_pairs, needs_rebuild, transfer_history
-from pysim.rotation import axis_of, free_rotate
+from pysim.contacts import FJ_COLUMNS, pair_pass, reduce_pass
+from pysim.jit import njit, pnjit, prange
+from pysim.neighbors import build_list, list_is_stale, transfer_rows
+from pysim.rotation import axis_from, axis_of, free_rotate, rotate_top
 from pysim.walls import wall_forces
 
 # indices into the 'sys' scalar array
-GAMMA_BG, GAMMA_ROT, GX, GY, GZ, EPS_X, EPS_Y, EPS_Z, GROWTH, SKIN, RINT_BUILD, K_D = range(12)
-SYS_SIZE = 12
+(GAMMA_BG, GAMMA_ROT, GX, GY, GZ, EPS_X, EPS_Y, EPS_Z, GROWTH, SKIN, RINT_BUILD, K_D,
+ RC_BUILD, HALF_BUILD, RODS) = range(15)
+SYS_SIZE = 15
+
+#: The pair arrays, passed and returned in this order by the kernels: the Verlet list
+#: (:func:`pysim.neighbors.build_list`: ``pi``, ``pj``, ``istart``, ``jstart``, ``jk``),
+#: the tangential springs ``hist`` (npairs, 3; (npairs, 0) without friction) and the
+#: per-pair reactions ``fj`` (at least npairs rows, scratch of
+#: :func:`pysim.contacts.pair_pass`).
+PAIR_ARRAYS = ("pi", "pj", "istart", "jstart", "jk", "hist", "fj")
+
+
+@njit
+def wrap1(xk, b):
+    """One coordinate wrapped into ``[0, b)``."""
+    xk -= b * np.floor(xk / b)
+    if xk >= b:  # round-off at the upper edge
+        xk -= b
+    return xk
 
 
 @njit
@@ -48,9 +71,7 @@ def wrap(x, box, periodic):
     for i in range(x.shape[0]):
         for k in range(3):
             if periodic[k]:
-                x[i, k] -= box[k] * np.floor(x[i, k] / box[k])
-                if x[i, k] >= box[k]:  # round-off at the upper edge
-                    x[i, k] -= box[k]
+                x[i, k] = wrap1(x[i, k], box[k])
 
 
 @njit
@@ -63,109 +84,184 @@ def max_of(a):
 
 
 @njit
-def maybe_rebuild(x, box, periodic, r_int, sys, pi, pj, hist, x_ref, box_ref):
-    """Rebuild the pair list (carrying the tangential history) when an unlisted pair
-    could come into range. Returns ``(pi, pj, hist, rebuilt)``."""
-    rmax = max_of(r_int)
-    growth = rmax / sys[RINT_BUILD] if sys[RINT_BUILD] > 0 else 1.0
-    if not needs_rebuild(x, x_ref, box, box_ref, periodic, sys[RINT_BUILD], sys[SKIN], growth):
-        return pi, pj, hist, False
-    npi, npj = build_pairs(x, r_int, box, periodic, sys[SKIN])
-    nhist = transfer_history(pi, pj, hist, npi, npj)
+def rebuild(x, u, box, periodic, r_int, half, sys, old_istart, old_pj, old_hist, fj, x_ref,
+            u_ref, box_ref):
+    """A new pair list for the current state, carrying the tangential springs over.
+    Returns the pair arrays (:data:`PAIR_ARRAYS`)."""
+    pi, pj, istart, jstart, jk = build_list(x, u, r_int, half, box, periodic, sys[SKIN])
+    hist = transfer_rows(old_istart, old_pj, old_hist, istart, pj)
+    if fj.shape[0] < pj.shape[0]:  # scratch with 10 % to spare
+        fj = np.empty((pj.shape[0] + pj.shape[0] // 10 + 16, FJ_COLUMNS))
     x_ref[:, :] = x
+    if u_ref.shape[0] == u.shape[0]:
+        u_ref[:, :] = u
     box_ref[:] = box
-    sys[RINT_BUILD] = rmax
-    return npi, npj, nhist, True
+    rc = 0.0
+    hm = 0.0
+    for i in range(x.shape[0]):
+        rc = max(rc, r_int[i] - half[i])
+        hm = max(hm, half[i])
+    sys[RINT_BUILD] = max_of(r_int)
+    sys[RC_BUILD] = 2.0 * rc
+    sys[HALF_BUILD] = hm
+    return pi, pj, istart, jstart, jk, hist, fj
 
 
 @njit
-def forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, hist, law, cp,
-           friction, planes, cyls, wp, wfriction, whist, wall_force, sys, t, dt, f, torque,
-           virial):
-    """Zero and fill ``f``, ``torque``, ``virial``: pair contacts, walls, gravity
-    ``m g``, drag ``-gamma_bg v`` and ``-gamma_rot omega``. Returns ``(elastic energy,
-    pair contacts, wall contacts)``."""
-    f[:, :] = 0.0
-    torque[:, :] = 0.0
-    virial[:, :] = 0.0
-    no_ij = np.empty((0, 2), np.int64)
-    no_rec = np.empty((0, REC_COLUMNS))
-    pe, nc = pair_forces(x, v, omega, u, radius, half, box, periodic, pi, pj, hist, law, cp,
-                         friction, dt, f, torque, virial, False, no_ij, no_rec)
-    nw = 0
-    if planes.shape[0] + cyls.shape[0] > 0:
-        nw = wall_forces(x, v, omega, u, radius, half, planes, cyls, t, law, wp, wfriction,
-                         whist, dt, f, torque, wall_force, False, no_ij, no_rec)
+def maybe_rebuild(x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist,
+                  fj, x_ref, u_ref, box_ref):
+    """Rebuild the pair list (carrying the tangential history) when an unlisted pair
+    could come into contact (:func:`pysim.neighbors.list_is_stale`). Returns the pair
+    arrays and whether it rebuilt."""
+    growth = max_of(r_int) / sys[RINT_BUILD] if sys[RINT_BUILD] > 0 else 1.0
+    if not list_is_stale(x, x_ref, u, u_ref, half, box, box_ref, periodic, sys[RC_BUILD],
+                         sys[HALF_BUILD], sys[SKIN], growth):
+        return pi, pj, istart, jstart, jk, hist, fj, False
+    pi, pj, istart, jstart, jk, hist, fj = rebuild(x, u, box, periodic, r_int, half, sys,
+                                                   istart, pj, hist, fj, x_ref, u_ref, box_ref)
+    return pi, pj, istart, jstart, jk, hist, fj, True
+
+
+@pnjit
+def _body(f, torque, v, omega, mass, gx, gy, gz, gb, gr):
+    for i in prange(f.shape[0]):
+        f[i, 0] += mass[i] * gx - gb * v[i, 0]
+        f[i, 1] += mass[i] * gy - gb * v[i, 1]
+        f[i, 2] += mass[i] * gz - gb * v[i, 2]
+        torque[i, 0] -= gr * omega[i, 0]
+        torque[i, 1] -= gr * omega[i, 1]
+        torque[i, 2] -= gr * omega[i, 2]
+
+
+@njit
+def forces(x, v, omega, u, radius, half, mass, box, periodic, pj, istart, jstart, jk, hist,
+           fj, law, cp, friction, planes, cyls, wp, wfriction, whist, wall_force, sys, t, dt,
+           f, torque, virial, stats):
+    """Overwrite ``f``, ``torque`` with pair contacts, walls, gravity ``m g``, drag
+    ``-gamma_bg v`` and ``-gamma_rot omega`` (added in that order). With ``stats`` also
+    the virial and returns ``(elastic energy, pair contacts, wall contacts)``; without,
+    the virial is left as it was and the first two are zero."""
+    pe, nc = pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law,
+                       cp, friction, dt, sys[RODS] != 0.0, f, torque, fj, stats, virial)
     gx, gy, gz = sys[GX], sys[GY], sys[GZ]
     gb = sys[GAMMA_BG]
     gr = sys[GAMMA_ROT]
-    if gx != 0.0 or gy != 0.0 or gz != 0.0 or gb != 0.0 or gr != 0.0:
-        for i in range(x.shape[0]):
-            f[i, 0] += mass[i] * gx - gb * v[i, 0]
-            f[i, 1] += mass[i] * gy - gb * v[i, 1]
-            f[i, 2] += mass[i] * gz - gb * v[i, 2]
-            torque[i, 0] -= gr * omega[i, 0]
-            torque[i, 1] -= gr * omega[i, 1]
-            torque[i, 2] -= gr * omega[i, 2]
+    body = gx != 0.0 or gy != 0.0 or gz != 0.0 or gb != 0.0 or gr != 0.0
+    walls = planes.shape[0] + cyls.shape[0] > 0
+    reduce_pass(f, torque, jstart, jk, fj, v, omega, mass, gx, gy, gz, gb, gr,
+                body and not walls)
+    nw = 0
+    if walls:
+        no_ij = np.empty((0, 2), np.int64)
+        no_rec = np.empty((0, 10))
+        nw = wall_forces(x, v, omega, u, radius, half, planes, cyls, t, law, wp, wfriction,
+                         whist, dt, f, torque, wall_force, False, no_ij, no_rec)
+        if body:
+            _body(f, torque, v, omega, mass, gx, gy, gz, gb, gr)
     return pe, nc, nw
 
 
 @njit
+def kick(v0, v1, v2, w0, w1, w2, f0, f1, f2, t0, t1, t2, u0, u1, u2, m, ip, ia, h):
+    """``v += h F/m``, ``omega += h I^-1 tau`` for one particle (scalars in and out)."""
+    a = h / m
+    tu = t0 * u0 + t1 * u1 + t2 * u2
+    c = (1.0 / ia - 1.0 / ip) * tu
+    return (v0 + a * f0, v1 + a * f1, v2 + a * f2, w0 + h * (t0 / ip + c * u0),
+            w1 + h * (t1 / ip + c * u1), w2 + h * (t2 / ip + c * u2))
+
+
+@pnjit
 def _kick(v, omega, u, f, torque, mass, inertia, h):
     """``v += h F/m``, ``omega += h I^-1 tau``."""
-    for i in range(v.shape[0]):
-        a = h / mass[i]
-        v[i, 0] += a * f[i, 0]
-        v[i, 1] += a * f[i, 1]
-        v[i, 2] += a * f[i, 2]
-        ip = inertia[i, 0]
-        ia = inertia[i, 1]
-        tu = torque[i, 0] * u[i, 0] + torque[i, 1] * u[i, 1] + torque[i, 2] * u[i, 2]
-        c = (1.0 / ia - 1.0 / ip) * tu
-        omega[i, 0] += h * (torque[i, 0] / ip + c * u[i, 0])
-        omega[i, 1] += h * (torque[i, 1] / ip + c * u[i, 1])
-        omega[i, 2] += h * (torque[i, 2] / ip + c * u[i, 2])
+    for i in prange(v.shape[0]):
+        (v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2]) = kick(
+            v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2], f[i, 0], f[i, 1],
+            f[i, 2], torque[i, 0], torque[i, 1], torque[i, 2], u[i, 0], u[i, 1], u[i, 2],
+            mass[i], inertia[i, 0], inertia[i, 1], h)
 
 
 @njit
-def _rotate_free(q, u, omega, inertia, dt):
-    """Exact free symmetric-top rotation over ``dt`` at constant angular momentum."""
-    for i in range(q.shape[0]):
+def free_step(q0, q1, q2, q3, u0, u1, u2, w0, w1, w2, ip, ia, dt):
+    """Exact free symmetric-top rotation of one particle over ``dt`` at constant angular
+    momentum ``L = I omega``. Returns the new quaternion (4), axis (3) and ``omega`` (3)."""
+    wu = w0 * u0 + w1 * u1 + w2 * u2
+    # L = I_perp omega + (I_axis - I_perp)(omega . u) u
+    l0 = ip * w0 + (ia - ip) * wu * u0
+    l1 = ip * w1 + (ia - ip) * wu * u1
+    l2 = ip * w2 + (ia - ip) * wu * u2
+    if l0 == 0.0 and l1 == 0.0 and l2 == 0.0:
+        return q0, q1, q2, q3, u0, u1, u2, w0, w1, w2
+    q0, q1, q2, q3 = rotate_top(q0, q1, q2, q3, l0, l1, l2, u0, u1, u2, ip, ia, dt)
+    u0, u1, u2 = axis_from(q0, q1, q2, q3)
+    # omega = I^-1 L with the new axis
+    lu = l0 * u0 + l1 * u1 + l2 * u2
+    c = (1.0 / ia - 1.0 / ip) * lu
+    return q0, q1, q2, q3, u0, u1, u2, l0 / ip + c * u0, l1 / ip + c * u1, l2 / ip + c * u2
+
+
+@pnjit
+def _rotate_free(q, u, omega, inertia, half, dt):
+    """Exact free rotation of every rod over ``dt`` (spheres keep their orientation)."""
+    for i in prange(q.shape[0]):
+        if half[i] > 0.0:
+            (q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2], omega[i, 0],
+             omega[i, 1], omega[i, 2]) = free_step(
+                q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2], omega[i, 0],
+                omega[i, 1], omega[i, 2], inertia[i, 0], inertia[i, 1], dt)
+
+
+@pnjit
+def _first_half(x, v, q, u, omega, f, torque, mass, inertia, half, box, periodic, h, dt):
+    """Steps 1-2 of velocity Verlet for every particle: half kick, drift, free rotation
+    (rods), wrap."""
+    b0, b1, b2 = box[0], box[1], box[2]
+    p0, p1, p2 = periodic[0], periodic[1], periodic[2]
+    for i in prange(x.shape[0]):
+        u0, u1, u2 = u[i, 0], u[i, 1], u[i, 2]
         ip = inertia[i, 0]
         ia = inertia[i, 1]
-        wu = omega[i, 0] * u[i, 0] + omega[i, 1] * u[i, 1] + omega[i, 2] * u[i, 2]
-        # L = I_perp omega + (I_axis - I_perp)(omega . u) u
-        l0 = ip * omega[i, 0] + (ia - ip) * wu * u[i, 0]
-        l1 = ip * omega[i, 1] + (ia - ip) * wu * u[i, 1]
-        l2 = ip * omega[i, 2] + (ia - ip) * wu * u[i, 2]
-        if l0 == 0.0 and l1 == 0.0 and l2 == 0.0:
-            continue
-        free_rotate(q, i, l0, l1, l2, u[i, 0], u[i, 1], u[i, 2], ip, ia, dt)
-        axis_of(q, i, u)
-        # omega = I^-1 L with the new axis
-        lu = l0 * u[i, 0] + l1 * u[i, 1] + l2 * u[i, 2]
-        c = (1.0 / ia - 1.0 / ip) * lu
-        omega[i, 0] = l0 / ip + c * u[i, 0]
-        omega[i, 1] = l1 / ip + c * u[i, 1]
-        omega[i, 2] = l2 / ip + c * u[i, 2]
+        v0, v1, v2, w0, w1, w2 = kick(v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1],
+                                      omega[i, 2], f[i, 0], f[i, 1], f[i, 2], torque[i, 0],
+                                      torque[i, 1], torque[i, 2], u0, u1, u2, mass[i], ip, ia,
+                                      h)
+        v[i, 0] = v0
+        v[i, 1] = v1
+        v[i, 2] = v2
+        x0 = x[i, 0] + dt * v0
+        x1 = x[i, 1] + dt * v1
+        x2 = x[i, 2] + dt * v2
+        if half[i] > 0.0:
+            (q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2], w0, w1,
+             w2) = free_step(q[i, 0], q[i, 1], q[i, 2], q[i, 3], u0, u1, u2, w0, w1, w2, ip, ia,
+                             dt)
+        omega[i, 0] = w0
+        omega[i, 1] = w1
+        omega[i, 2] = w2
+        x[i, 0] = wrap1(x0, b0) if p0 else x0
+        x[i, 1] = wrap1(x1, b1) if p1 else x1
+        x[i, 2] = wrap1(x2, b2) if p2 else x2
 
 
-@njit
-def _deform(x, box, radius, half, r_int, mass, inertia, sys, dt):
-    """Affine box change and particle growth at the end of a step."""
-    for k in range(3):
-        eps = sys[EPS_X + k]
-        if eps != 0.0:
-            sc = np.exp(eps * dt)
-            box[k] *= sc
-            for i in range(x.shape[0]):
-                x[i, k] *= sc
-    g = sys[GROWTH]
-    if g != 0.0:
-        sc = np.exp(g * dt)
-        sc3 = sc * sc * sc
-        sc5 = sc3 * sc * sc
-        for i in range(x.shape[0]):
+@pnjit
+def _second_half(x, v, omega, u, f, torque, mass, inertia, radius, half, r_int, h, scale,
+                 deform, sc, sc3, sc5):
+    """Steps 4-5: half kick, affine remap of the positions (``scale`` per axis, when
+    ``deform``), growth of every particle by ``sc`` (when ``sc != 1``)."""
+    s0, s1, s2 = scale[0], scale[1], scale[2]
+    for i in prange(x.shape[0]):
+        (v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2]) = kick(
+            v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2], f[i, 0], f[i, 1],
+            f[i, 2], torque[i, 0], torque[i, 1], torque[i, 2], u[i, 0], u[i, 1], u[i, 2],
+            mass[i], inertia[i, 0], inertia[i, 1], h)
+        if deform:
+            if s0 != 1.0:
+                x[i, 0] *= s0
+            if s1 != 1.0:
+                x[i, 1] *= s1
+            if s2 != 1.0:
+                x[i, 2] *= s2
+        if sc != 1.0:
             radius[i] *= sc
             half[i] *= sc
             r_int[i] *= sc
@@ -176,41 +272,50 @@ def _deform(x, box, radius, half, r_int, mass, inertia, sys, dt):
 
 @njit
 def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia, box,
-                 periodic, pi, pj, hist, x_ref, box_ref, law, cp, friction, planes, cyls, wp,
-                 wfriction, whist, wall_force, sys, clock, dt, nsteps, virial):
+                 periodic, pi, pj, istart, jstart, jk, hist, fj, x_ref, u_ref, box_ref, law, cp,
+                 friction, planes, cyls, wp, wfriction, whist, wall_force, sys, clock, dt, nsteps,
+                 virial):
     """Advance ``nsteps`` velocity-Verlet steps (see the module doc).
 
     ``clock = (t_seg, s_seg, step0)``: the time after step ``k`` of this call is
     ``t_seg + (step0 + k + 1 - s_seg) dt``, a function of the step number alone, so that
     results do not depend on how a run is cut into calls (restarts are bit-identical).
     ``f``/``torque`` must hold the forces of the current state on entry and hold those of
-    the final state on exit. Returns ``(pi, pj, hist, elastic energy, pair contacts,
-    wall contacts, rebuilds)``.
+    the final state on exit (the virial too). Returns ``(pair arrays (7), elastic energy,
+    pair contacts, wall contacts, rebuilds)``.
     """
     h = 0.5 * dt
     pe = 0.0
     nc = 0
     nw = 0
     rebuilds = 0
+    scale = np.ones(3)
+    deform = False
+    for k in range(3):
+        if sys[EPS_X + k] != 0.0:
+            scale[k] = np.exp(sys[EPS_X + k] * dt)
+            deform = True
+    sc = 1.0
+    if sys[GROWTH] != 0.0:
+        sc = np.exp(sys[GROWTH] * dt)
+    sc3 = sc * sc * sc
+    sc5 = sc3 * sc * sc
     for k in range(nsteps):
         t = clock[0] + (clock[2] + k + 1 - clock[1]) * dt
-        _kick(v, omega, u, f, torque, mass, inertia, h)
-        for i in range(x.shape[0]):
-            x[i, 0] += dt * v[i, 0]
-            x[i, 1] += dt * v[i, 1]
-            x[i, 2] += dt * v[i, 2]
-        _rotate_free(q, u, omega, inertia, dt)
-        wrap(x, box, periodic)
-        pi, pj, hist, rebuilt = maybe_rebuild(x, box, periodic, r_int, sys, pi, pj, hist,
-                                              x_ref, box_ref)
+        _first_half(x, v, q, u, omega, f, torque, mass, inertia, half, box, periodic, h, dt)
+        pi, pj, istart, jstart, jk, hist, fj, rebuilt = maybe_rebuild(
+            x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,
+            u_ref, box_ref)
         if rebuilt:
             rebuilds += 1
-        pe, nc, nw = forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, hist,
-                            law, cp, friction, planes, cyls, wp, wfriction, whist, wall_force,
-                            sys, t, dt, f, torque, virial)
-        _kick(v, omega, u, f, torque, mass, inertia, h)
-        _deform(x, box, radius, half, r_int, mass, inertia, sys, dt)
-    return pi, pj, hist, pe, nc, nw, rebuilds
+        pe, nc, nw = forces(x, v, omega, u, radius, half, mass, box, periodic, pj, istart,
+                            jstart, jk, hist, fj, law, cp, friction, planes, cyls, wp, wfriction,
+                            whist, wall_force, sys, t, dt, f, torque, virial, k == nsteps - 1)
+        for kk in range(3):
+            box[kk] *= scale[kk]
+        _second_half(x, v, omega, u, f, torque, mass, inertia, radius, half, r_int, h, scale,
+                     deform, sc, sc3, sc5)
+    return pi, pj, istart, jstart, jk, hist, fj, pe, nc, nw, rebuilds
 
 
 @njit
@@ -237,12 +342,12 @@ def _mobility_step(x0, q0, f, torque, mass, inertia, msize, kd, u, x, q, v, omeg
 
 @njit
 def heun_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia, msize, box,
-               periodic, pi, pj, hist, x_ref, box_ref, law, cp, planes, cyls, wp, wall_force,
-               sys, clock, dt, nsteps, virial):
+               periodic, pi, pj, istart, jstart, jk, hist, fj, x_ref, u_ref, box_ref, law, cp,
+               planes, cyls, wp, wall_force, sys, clock, dt, nsteps, virial):
     """Advance ``nsteps`` overdamped Heun steps (see the module doc). ``msize`` is the
     particle area (2-D) or volume (3-D); ``sys[K_D]`` the substrate drag ``k_d``; the box
     contracts at ``sys[EPS_*]`` (``-kappa``). ``v``/``omega`` return the last mobility
-    velocities (non-affine). Returns ``(pi, pj, hist, elastic energy, contacts,
+    velocities (non-affine). Returns ``(pair arrays (7), elastic energy, contacts,
     rebuilds)``."""
     n = x.shape[0]
     x0 = np.empty((n, 3))
@@ -270,13 +375,14 @@ def heun_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
         for i in range(n):
             axis_of(q, i, u)
         wrap(x, box, periodic)
-        pi, pj, hist, rebuilt = maybe_rebuild(x, box, periodic, r_int, sys, pi, pj, hist,
-                                              x_ref, box_ref)
+        pi, pj, istart, jstart, jk, hist, fj, rebuilt = maybe_rebuild(
+            x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,
+            u_ref, box_ref)
         if rebuilt:
             rebuilds += 1
-        forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, hist, law, cp,
-               False, planes, cyls, wp, False, whist, wall_force, sys, t + dt, dt, f, torque,
-               virial)
+        forces(x, v, omega, u, radius, half, mass, box, periodic, pj, istart, jstart, jk, hist,
+               fj, law, cp, False, planes, cyls, wp, False, whist, wall_force, sys, t + dt, dt, f,
+               torque, virial, False)
         # corrector: x = scale x0 + dt/2 (scale F0 + F1)/(k_d a)
         for i in range(n):
             mt = 0.5 * dt / (kd * msize[i])
@@ -294,24 +400,25 @@ def heun_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
             axis_of(q, i, u)
         wrap(x, box, periodic)
         t = clock[0] + (clock[2] + kk + 1 - clock[1]) * dt
-        pi, pj, hist, rebuilt = maybe_rebuild(x, box, periodic, r_int, sys, pi, pj, hist,
-                                              x_ref, box_ref)
+        pi, pj, istart, jstart, jk, hist, fj, rebuilt = maybe_rebuild(
+            x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,
+            u_ref, box_ref)
         if rebuilt:
             rebuilds += 1
-        pe, nc, _ = forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, hist,
-                           law, cp, False, planes, cyls, wp, False, whist, wall_force, sys, t,
-                           dt, f, torque, virial)
-    return pi, pj, hist, pe, nc, rebuilds
+        pe, nc, _ = forces(x, v, omega, u, radius, half, mass, box, periodic, pj, istart, jstart,
+                           jk, hist, fj, law, cp, False, planes, cyls, wp, False, whist,
+                           wall_force, sys, t, dt, f, torque, virial, kk == nsteps - 1)
+    return pi, pj, istart, jstart, jk, hist, fj, pe, nc, rebuilds
 
 
 @njit
 def fire_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia, box,
-               periodic, pi, pj, hist, x_ref, box_ref, law, cp, planes, cyls, wp, wall_force,
-               sys, fire, nsteps, f_tol, virial):
+               periodic, pi, pj, istart, jstart, jk, hist, fj, x_ref, u_ref, box_ref, law, cp,
+               planes, cyls, wp, wall_force, sys, fire, nsteps, f_tol, virial):
     """Up to ``nsteps`` FIRE iterations at fixed box; stops early once every force and
     torque is below ``f_tol`` (in magnitude). ``fire`` is the float array
     ``[dt, alpha, n_positive, dt_max, dt_min]``, updated in place so that calls can be
-    chained. Returns ``(pi, pj, hist, elastic energy, contacts, iterations, max |F|,
+    chained. Returns ``(pair arrays (7), elastic energy, contacts, iterations, max |F|,
     max |tau|)``."""
     n = x.shape[0]
     f_inc, f_dec, alpha0, f_alpha, n_delay = 1.1, 0.5, 0.1, 0.99, 5
@@ -385,11 +492,12 @@ def fire_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
             x[i, 0] += dt * v[i, 0]
             x[i, 1] += dt * v[i, 1]
             x[i, 2] += dt * v[i, 2]
-        _rotate_free(q, u, omega, inertia, dt)
+        _rotate_free(q, u, omega, inertia, half, dt)
         wrap(x, box, periodic)
-        pi, pj, hist, _ = maybe_rebuild(x, box, periodic, r_int, sys, pi, pj, hist, x_ref,
-                                        box_ref)
-        pe, nc, _ = forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, hist,
-                           law, cp, False, planes, cyls, wp, False, whist, wall_force, sys, 0.0,
-                           dt, f, torque, virial)
-    return pi, pj, hist, pe, nc, it, fmax, tmax
+        pi, pj, istart, jstart, jk, hist, fj, _ = maybe_rebuild(
+            x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,
+            u_ref, box_ref)
+        pe, nc, _ = forces(x, v, omega, u, radius, half, mass, box, periodic, pj, istart, jstart,
+                           jk, hist, fj, law, cp, False, planes, cyls, wp, False, whist,
+                           wall_force, sys, 0.0, dt, f, torque, virial, True)
+    return pi, pj, istart, jstart, jk, hist, fj, pe, nc, it, fmax, tmax

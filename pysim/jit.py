@@ -1,8 +1,18 @@
 """The one place where Numba options are set.
 
-Every kernel in pysim is compiled with ``JIT_FLAGS``. ``fastmath`` stays off: the
-reference engine must give bit-identical results for the same seed. ``cache`` makes
-the second start of the CLI fast (compiled code is stored next to the sources).
+Every kernel in pysim is compiled with ``JIT_FLAGS``; the few kernels that run their
+particle or pair loops on several threads (``numba.prange``) use ``PARALLEL_FLAGS``, the
+same flags plus ``parallel=True``. ``fastmath`` stays off: the reference engine must give
+bit-identical results for the same seed. ``cache`` makes the second start of the CLI
+fast (compiled code is stored next to the sources, in ``__pycache__``).
+
+Helpers called once per pair or per particle take and return scalars only: an array
+argument costs two atomic reference-count updates per call, more than a contact law.
+
+Threads never change results: every parallel loop either writes only to the particle or
+pair it owns, or reduces over fixed blocks whose partial sums are added in block order
+(see :mod:`pysim.contacts`), so 1 and 2 threads give the same bits. The number of
+threads is Numba's (``NUMBA_NUM_THREADS``, default: all cores; :func:`set_threads`).
 
 Set ``NUMBA_DISABLE_JIT=1`` to run every kernel as plain Python (slow, but with
 readable tracebacks and real coverage).
@@ -12,6 +22,26 @@ from __future__ import annotations
 import numba
 
 JIT_FLAGS = dict(cache=True, fastmath=False, nogil=True, error_model="numpy")
+PARALLEL_FLAGS = dict(JIT_FLAGS, parallel=True)
+
+# The OpenMP layer starts a parallel region in a few microseconds (the kernels start
+# five per time step); fall back to Numba's own pool where libgomp is missing.
+numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
 
 njit = numba.njit(**JIT_FLAGS)
 """Decorator: ``@njit`` compiles a kernel with the project's JIT flags."""
+
+pnjit = numba.njit(**PARALLEL_FLAGS)
+"""Decorator: ``@pnjit`` compiles a kernel whose ``prange`` loops run on threads."""
+
+prange = numba.prange
+
+
+def set_threads(n: int) -> None:
+    """Use ``n`` threads in the parallel kernels (at most ``NUMBA_NUM_THREADS``)."""
+    numba.set_num_threads(int(n))
+
+
+def get_threads() -> int:
+    """Threads the parallel kernels use now."""
+    return int(numba.get_num_threads())

@@ -1,21 +1,34 @@
 """Cell list and Verlet pair list with a skin, for boxes that change size.
 
-Every particle has an *interaction radius* ``r_int = R + L/2`` (the radius of the
-sphere that encloses a spherocylinder), so elongated particles are handled by the
-same code as spheres. Two particles are listed as a pair when their centre distance
-is below ``r_int_i + r_int_j + skin``. The list is rebuilt when the displacement
-since the last build, together with any box contraction, could bring an unlisted
-pair into contact (:func:`needs_rebuild`).
+Every particle has an *interaction radius* ``r_int = R + L/2 + d_c/2`` (the radius of
+the sphere that encloses a spherocylinder and its cohesion range) and a *contact reach*
+``r_c = r_int - L/2 = R + d_c/2``. Two particles are listed as a pair when the shortest
+distance between their spines is below ``r_c_i + r_c_j + skin`` (for spheres: the centre
+distance). The cell list finds candidates by the enclosing spheres
+(``|x_i - x_j| < r_int_i + r_int_j + skin``); the spine test then keeps, for rods of
+``L/D = 4`` at ``phi = 0.5``, about one candidate in eight.
 
-Pairs are stored as two int64 arrays ``(pi, pj)`` with ``pi < pj``, sorted by
-``pi`` then by ``pj``: the order is a pure function of the positions, so forces are
-summed in the same order on every run (bit-identical results).
+The list is rebuilt when the motion since the last build (translations, rotations of
+the spines, an affine box change, particle growth) could bring an unlisted pair into
+contact (:func:`list_is_stale`).
+
+Storage (:func:`build_list`): int32 arrays ``(pi, pj)`` with ``pi < pj``, sorted by
+``pi`` then by ``pj``, the row starts ``istart`` (particle ``i``'s pairs are
+``istart[i]:istart[i+1]``) and the transposed index ``jstart``/``jk`` (the pairs in
+which particle ``p`` is the second member are ``jk[jstart[p]:jstart[p+1]]``, in
+increasing pair order). The order is a pure function of the positions, so forces are
+summed in the same order on every run and with any number of threads (bit-identical
+results; :mod:`pysim.contacts`).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from pysim.jit import njit
+from pysim.geometry import closest_params
+from pysim.jit import njit, pnjit, prange
+
+#: particles per block of the parallel loops (fixed: results never depend on threads)
+BLOCK = 256
 
 
 @njit
@@ -27,46 +40,18 @@ def minimum_image(d, box, periodic):
 
 
 @njit
-def _axis_cells(c, nc, periodic_axis, out):
-    """Distinct neighbour cell indices of cell ``c`` along one axis; returns how many."""
-    m = 0
-    for dc in range(-1, 2):
-        cc = c + dc
-        if periodic_axis:
-            cc = cc % nc
-        elif cc < 0 or cc >= nc:
-            continue
-        dup = False
-        for q in range(m):
-            if out[q] == cc:
-                dup = True
-        if not dup:
-            out[m] = cc
-            m += 1
-    return m
-
-
-@njit
-def build_pairs(x, r_int, box, periodic, skin):
-    """Verlet pairs ``i < j`` with ``|x_i - x_j| < r_int_i + r_int_j + skin``.
-
-    Uses a cell list with cells at least ``2 max(r_int) + skin`` wide. Returns
-    ``(pi, pj)``, int64 arrays sorted by ``pi`` then ``pj``.
-    """
+def _grid(x, box, periodic, cell_min):
+    """Counting sort of the particles into cells at least ``cell_min`` wide.
+    Returns ``(nc (3,), cell_of (N,), start (ncell+1,), members (N,))``; the particles
+    of cell ``c`` are ``members[start[c]:start[c+1]]`` in increasing index."""
     n = x.shape[0]
-    rmax = 0.0
-    for i in range(n):
-        if r_int[i] > rmax:
-            rmax = r_int[i]
-    cell_min = 2.0 * rmax + skin
     nc = np.empty(3, np.int64)
     for k in range(3):
         m = int(box[k] // cell_min) if box[k] > 0 else 1
         nc[k] = max(m, 1)
     ncell = nc[0] * nc[1] * nc[2]
-    # counting sort of particles into cells
     cell_of = np.empty(n, np.int64)
-    count = np.zeros(ncell + 1, np.int64)
+    start = np.zeros(ncell + 1, np.int64)
     for i in range(n):
         c = 0
         for k in range(3):
@@ -77,81 +62,273 @@ def build_pairs(x, r_int, box, periodic, skin):
                 ck = ck % nc[k] if periodic[k] else nc[k] - 1
             c = c * nc[k] + ck
         cell_of[i] = c
-        count[c + 1] += 1
+        start[c + 1] += 1
     for c in range(ncell):
-        count[c + 1] += count[c]
-    start = count.copy()
+        start[c + 1] += start[c]
+    fill = start[:ncell].copy()
     members = np.empty(n, np.int64)
     for i in range(n):
         c = cell_of[i]
-        members[start[c]] = i
-        start[c] += 1
+        members[fill[c]] = i
+        fill[c] += 1
+    return nc, cell_of, start, members
 
-    cap = 8 * n + 16
-    pi = np.empty(cap, np.int64)
-    pj = np.empty(cap, np.int64)
-    npair = 0
-    ax = np.empty(3, np.int64)
-    ay = np.empty(3, np.int64)
-    az = np.empty(3, np.int64)
-    d = np.empty(3)
-    row = np.empty(64, np.int64)  # neighbours of one particle, sorted before storing
-    for i in range(n):
+
+@njit
+def _shift_range(nc, periodic_axis):
+    """Cell offsets ``lo..hi`` along one axis that visit each neighbour cell once."""
+    if periodic_axis:
+        if nc >= 3:
+            return -1, 1
+        return 0, nc - 1
+    return -1, 1
+
+
+@njit
+def _rows(lo, hi, x, u, r_int, half, box, periodic, skin, rods, nc, cell_of, start, members,
+          counts, pi, pj, istart, fill):
+    """Rows ``lo..hi-1`` of the list: neighbours ``j > i`` of each particle ``i`` whose
+    spines are closer than ``r_c_i + r_c_j + skin``. Without ``fill`` their number goes to
+    ``counts[i + 1]``; with it they are written, sorted, to ``pj[istart[i]:]``."""
+    lox, hix = _shift_range(nc[0], periodic[0])
+    loy, hiy = _shift_range(nc[1], periodic[1])
+    loz, hiz = _shift_range(nc[2], periodic[2])
+    for i in range(lo, hi):
         c = cell_of[i]
         cz = c % nc[2]
         cy = (c // nc[2]) % nc[1]
         cx = c // (nc[1] * nc[2])
-        mx = _axis_cells(cx, nc[0], periodic[0], ax)
-        my = _axis_cells(cy, nc[1], periodic[1], ay)
-        mz = _axis_cells(cz, nc[2], periodic[2], az)
-        nrow = 0
-        for a in range(mx):
-            for b in range(my):
-                for e in range(mz):
-                    cc = (ax[a] * nc[1] + ay[b]) * nc[2] + az[e]
-                    for q in range(count[cc], count[cc + 1]):
+        a = istart[i] if fill else 0
+        m = 0
+        xi0, xi1, xi2 = x[i, 0], x[i, 1], x[i, 2]
+        ri = r_int[i]
+        hi_ = half[i]
+        for ax in range(lox, hix + 1):
+            ccx = cx + ax
+            if periodic[0]:
+                ccx %= nc[0]
+            elif ccx < 0 or ccx >= nc[0]:
+                continue
+            for ay in range(loy, hiy + 1):
+                ccy = cy + ay
+                if periodic[1]:
+                    ccy %= nc[1]
+                elif ccy < 0 or ccy >= nc[1]:
+                    continue
+                for az in range(loz, hiz + 1):
+                    ccz = cz + az
+                    if periodic[2]:
+                        ccz %= nc[2]
+                    elif ccz < 0 or ccz >= nc[2]:
+                        continue
+                    cc = (ccx * nc[1] + ccy) * nc[2] + ccz
+                    for q in range(start[cc], start[cc + 1]):
                         j = members[q]
                         if j <= i:
                             continue
-                        for k in range(3):
-                            d[k] = x[j, k] - x[i, k]
-                        minimum_image(d, box, periodic)
-                        rc = r_int[i] + r_int[j] + skin
-                        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < rc * rc:
-                            if nrow == row.shape[0]:
-                                bigger = np.empty(2 * nrow, np.int64)
-                                bigger[:nrow] = row
-                                row = bigger
-                            row[nrow] = j
-                            nrow += 1
-        row[:nrow].sort()
-        if npair + nrow > cap:
-            cap = 2 * (npair + nrow)
-            pi2 = np.empty(cap, np.int64)
-            pj2 = np.empty(cap, np.int64)
-            pi2[:npair] = pi[:npair]
-            pj2[:npair] = pj[:npair]
-            pi = pi2
-            pj = pj2
-        for q in range(nrow):
-            pi[npair] = i
-            pj[npair] = row[q]
-            npair += 1
-    return pi[:npair].copy(), pj[:npair].copy()
+                        d0 = x[j, 0] - xi0
+                        d1 = x[j, 1] - xi1
+                        d2 = x[j, 2] - xi2
+                        if periodic[0]:
+                            d0 -= box[0] * np.floor(d0 / box[0] + 0.5)
+                        if periodic[1]:
+                            d1 -= box[1] * np.floor(d1 / box[1] + 0.5)
+                        if periodic[2]:
+                            d2 -= box[2] * np.floor(d2 / box[2] + 0.5)
+                        rc = ri + r_int[j] + skin
+                        if d0 * d0 + d1 * d1 + d2 * d2 >= rc * rc:
+                            continue
+                        hj = half[j]
+                        if rods and (hi_ > 0.0 or hj > 0.0):
+                            s, t = closest_params(-d0, -d1, -d2, u[i, 0], u[i, 1], u[i, 2], hi_,
+                                                  u[j, 0], u[j, 1], u[j, 2], hj)
+                            g0 = d0 + t * u[j, 0] - s * u[i, 0]
+                            g1 = d1 + t * u[j, 1] - s * u[i, 1]
+                            g2 = d2 + t * u[j, 2] - s * u[i, 2]
+                            rs = ri - hi_ + r_int[j] - hj + skin
+                            if g0 * g0 + g1 * g1 + g2 * g2 >= rs * rs:
+                                continue
+                        if fill:
+                            pj[a + m] = j
+                        m += 1
+        if fill:
+            for q in range(a, a + m):  # insertion sort of the row by j
+                v = pj[q]
+                r = q - 1
+                while r >= a and pj[r] > v:
+                    pj[r + 1] = pj[r]
+                    r -= 1
+                pj[r + 1] = v
+                pi[q] = i
+        else:
+            counts[i + 1] = m
+
+
+@pnjit
+def build_list(x, u, r_int, half, box, periodic, skin):
+    """Verlet pairs ``i < j`` whose spines are closer than ``r_c_i + r_c_j + skin``
+    (``r_c = r_int - half``). Returns ``(pi, pj, istart, jstart, jk)`` (see the module
+    doc): pairs as int32, sorted by ``pi`` then ``pj``."""
+    n = x.shape[0]
+    rmax = 0.0
+    rods = False
+    for i in range(n):
+        if r_int[i] > rmax:
+            rmax = r_int[i]
+        if half[i] > 0.0:
+            rods = True
+    nc, cell_of, start, members = _grid(x, box, periodic, 2.0 * rmax + skin)
+    counts = np.zeros(n + 1, np.int64)
+    nb = (n + BLOCK - 1) // BLOCK
+    none = np.empty(0, np.int32)
+    for b in prange(nb):
+        _rows(b * BLOCK, min(n, (b + 1) * BLOCK), x, u, r_int, half, box, periodic, skin, rods,
+              nc, cell_of, start, members, counts, none, none, counts, False)
+    for i in range(n):
+        counts[i + 1] += counts[i]
+    istart = counts
+    npair = istart[n]
+    pi = np.empty(npair, np.int32)
+    pj = np.empty(npair, np.int32)
+    for b in prange(nb):
+        _rows(b * BLOCK, min(n, (b + 1) * BLOCK), x, u, r_int, half, box, periodic, skin, rods,
+              nc, cell_of, start, members, counts, pi, pj, istart, True)
+    jstart, jk = transpose(pj, n)
+    return pi, pj, istart, jstart, jk
+
+
+@njit
+def transpose(pj, n):
+    """``(jstart, jk)``: the pairs in which particle ``p`` is the second member are
+    ``jk[jstart[p]:jstart[p+1]]``, in increasing pair order (a stable counting sort)."""
+    jstart = np.zeros(n + 1, np.int64)
+    for k in range(pj.shape[0]):
+        jstart[pj[k] + 1] += 1
+    for p in range(n):
+        jstart[p + 1] += jstart[p]
+    fill = jstart[:n].copy()
+    jk = np.empty(pj.shape[0], np.int32)
+    for k in range(pj.shape[0]):
+        p = pj[k]
+        jk[fill[p]] = k
+        fill[p] += 1
+    return jstart, jk
+
+
+@njit
+def row_starts(pi, n):
+    """``istart`` of a pair list sorted by ``pi``: row ``i`` is ``istart[i]:istart[i+1]``."""
+    istart = np.zeros(n + 1, np.int64)
+    for k in range(pi.shape[0]):
+        istart[pi[k] + 1] += 1
+    for i in range(n):
+        istart[i + 1] += istart[i]
+    return istart
+
+
+@pnjit
+def transfer_rows(old_start, old_pj, old_hist, new_start, new_pj):
+    """Carry per-pair history (tangential springs) from an old pair list to a new one,
+    row by row (both sorted by ``(i, j)``); pairs new to the list start at zero."""
+    n = new_start.shape[0] - 1
+    cols = old_hist.shape[1]
+    new = np.zeros((new_pj.shape[0], cols))
+    if old_start.shape[0] != new_start.shape[0] or cols == 0:
+        return new
+    for i in prange(n):
+        a = old_start[i]
+        ea = old_start[i + 1]
+        for b in range(new_start[i], new_start[i + 1]):
+            while a < ea and old_pj[a] < new_pj[b]:
+                a += 1
+            if a < ea and old_pj[a] == new_pj[b]:
+                for c in range(cols):
+                    new[b, c] = old_hist[a, c]
+    return new
+
+
+@pnjit
+def list_is_stale(x, x_ref, u, u_ref, half, box, box_ref, periodic, rc_ref, h_ref, skin,
+                  growth):
+    """True when an unlisted pair could now be in contact.
+
+    At the last build (positions ``x_ref``, axes ``u_ref``, box ``box_ref``) every unlisted
+    pair had a spine distance above ``r_cs + skin`` (``r_cs <= rc_ref``, twice the largest
+    contact reach). Since then the box was scaled per axis by ``a_k`` (``sigma = min(1,
+    a_k)``, ``eps = max |1 - a_k|``), every reach and half-length grew by ``growth``, and a
+    spine point of particle ``i`` moved by at most ``delta_i = |x_i - a x_ref_i| +
+    h_i |u_i - u_ref_i|`` relative to the scaled reference. The spine distance of the pair
+    is then at least ``sigma (r_cs + skin) - 2 (eps + |growth - 1|) h_ref - 2 max delta``,
+    while contact needs less than ``growth r_cs``: rebuild when the bound can fall below
+    (``h_ref`` the largest half-length at the build). For spheres this is the classic
+    ``2 max |dx| > skin`` rule, corrected for box contraction.
+    """
+    n = x.shape[0]
+    sigma = 1.0
+    eps = 0.0
+    scale = np.empty(3)
+    for k in range(3):
+        a = box[k] / box_ref[k] if box_ref[k] > 0 else 1.0
+        scale[k] = a
+        sigma = min(sigma, a)
+        eps = max(eps, abs(1.0 - a))
+    hscale = max(1.0, 1.0 / growth) if growth > 0 else 1.0
+    nb = (n + BLOCK - 1) // BLOCK
+    dmax = np.zeros(nb)
+    for b in prange(nb):
+        m = 0.0
+        for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
+            d2 = 0.0
+            for k in range(3):
+                dk = x[i, k] - x_ref[i, k] * scale[k]
+                if periodic[k]:
+                    dk -= box[k] * np.floor(dk / box[k] + 0.5)
+                d2 += dk * dk
+            dl = np.sqrt(d2)
+            if half[i] > 0.0:
+                e0 = u[i, 0] - u_ref[i, 0]
+                e1 = u[i, 1] - u_ref[i, 1]
+                e2 = u[i, 2] - u_ref[i, 2]
+                dl += half[i] * hscale * np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+            if dl > m:
+                m = dl
+        dmax[b] = m
+    worst = 0.0
+    for b in range(nb):
+        if dmax[b] > worst:
+            worst = dmax[b]
+    lhs = sigma * skin - 2.0 * (eps + abs(growth - 1.0)) * h_ref - 2.0 * worst
+    rhs = max(growth - sigma, 0.0) * rc_ref
+    return lhs <= rhs
+
+
+def spatial_order(x, box, cell: float = 1.0) -> np.ndarray:
+    """A permutation that sorts particles by cell (row-major cells of edge ~``cell``):
+    applied to an initial configuration it keeps neighbours close in memory, which the
+    contact loop's speed for large N depends on (LAMMPS sorts its atoms likewise)."""
+    x = np.asarray(x, dtype=np.float64)
+    box = np.asarray(box, dtype=np.float64)
+    nc = np.maximum((box // cell).astype(np.int64), 1)
+    c = np.clip((x / np.where(box > 0, box, 1.0) * nc).astype(np.int64), 0, nc - 1)
+    key = (c[:, 0] * nc[1] + c[:, 1]) * nc[2] + c[:, 2]
+    return np.argsort(key, kind="stable")
+
+
+# -- the sphere-bound list of the first version (kept as a simple, tested API) -------------
+def build_pairs(x, r_int, box, periodic, skin):
+    """Verlet pairs ``i < j`` with ``|x_i - x_j| < r_int_i + r_int_j + skin`` (the list
+    of enclosing spheres). Returns ``(pi, pj)`` sorted by ``pi`` then ``pj``."""
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    n = x.shape[0]
+    pi, pj, *_ = build_list(x, np.zeros((n, 3)), np.ascontiguousarray(r_int, dtype=np.float64),
+                            np.zeros(n), np.asarray(box, dtype=np.float64),
+                            np.asarray(periodic, dtype=np.bool_), float(skin))
+    return pi.astype(np.int64), pj.astype(np.int64)
 
 
 @njit
 def needs_rebuild(x, x_ref, box, box_ref, periodic, r_int_max, skin, growth):
-    """True when an unlisted pair could now be within its interaction range.
-
-    ``x_ref``/``box_ref`` are the positions and box at the last build, ``growth`` the
-    factor by which every interaction radius has grown since (1 without growth). A pair
-    that was unlisted had ``r_ref > r_c + skin``; after the box is scaled by ``s`` (the
-    smallest per-axis ratio, at most 1) and each particle moved by at most ``d_max``
-    relative to the affinely scaled reference, ``r >= s (r_c + skin) - 2 d_max``, while
-    its range is now ``growth r_c``. Rebuild when the bound can fall below the range
-    (with ``r_c <= 2 r_int_max``).
-    """
+    """Sphere form of :func:`list_is_stale` (``2 r_int_max`` the largest pair range)."""
     s = 1.0
     for k in range(3):
         if box_ref[k] > 0:
@@ -175,10 +352,8 @@ def needs_rebuild(x, x_ref, box, box_ref, periodic, r_int_max, skin, growth):
 
 @njit
 def transfer_history(old_pi, old_pj, old_hist, new_pi, new_pj):
-    """Carry per-pair history (tangential springs) from an old pair list to a new one.
-
-    Both lists are sorted by ``(i, j)``: a merge walks them once. Pairs new to the list
-    start with zero history."""
+    """Carry per-pair history from an old pair list to a new one (both sorted by
+    ``(i, j)``) with one merge; pairs new to the list start with zero history."""
     new = np.zeros((new_pi.shape[0], old_hist.shape[1]))
     a = 0
     na = old_pi.shape[0]

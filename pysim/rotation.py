@@ -27,12 +27,15 @@ def quat_mul(a0, a1, a2, a3, b0, b1, b2, b3):
 
 
 @njit
+def axis_from(w, x, y, z):
+    """Spine direction ``R(q) e_z`` of the quaternion ``(w, x, y, z)``."""
+    return 2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y)
+
+
+@njit
 def axis_of(q, i, u):
     """Spine direction ``u[i] = R(q[i]) e_z`` (in place)."""
-    w, x, y, z = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
-    u[i, 0] = 2.0 * (x * z + w * y)
-    u[i, 1] = 2.0 * (y * z - w * x)
-    u[i, 2] = 1.0 - 2.0 * (x * x + y * y)
+    u[i, 0], u[i, 1], u[i, 2] = axis_from(q[i, 0], q[i, 1], q[i, 2], q[i, 3])
 
 
 @njit
@@ -43,11 +46,11 @@ def axes(q, u):
 
 
 @njit
-def free_rotate(q, i, l0, l1, l2, ux, uy, uz, i_perp, i_axis, dt):
-    """Advance orientation ``q[i]`` by ``dt`` of free symmetric-top motion with lab
-    angular momentum ``L = (l0, l1, l2)``; ``(ux, uy, uz)`` is the current spine axis."""
+def rotate_top(w, x, y, z, l0, l1, l2, ux, uy, uz, i_perp, i_axis, dt):
+    """Orientation ``(w, x, y, z)`` advanced by ``dt`` of free symmetric-top motion with
+    lab angular momentum ``L = (l0, l1, l2)``; ``(ux, uy, uz)`` is the current spine axis.
+    Returns the new unit quaternion."""
     ln = np.sqrt(l0 * l0 + l1 * l1 + l2 * l2)
-    w, x, y, z = q[i, 0], q[i, 1], q[i, 2], q[i, 3]
     if ln > 0.0:
         half = 0.5 * ln * dt / i_perp
         sh = np.sin(half) / ln
@@ -58,10 +61,14 @@ def free_rotate(q, i, l0, l1, l2, ux, uy, uz, i_perp, i_axis, dt):
             # body-frame rotation about e_z: right multiplication
             w, x, y, z = quat_mul(w, x, y, z, np.cos(0.5 * spin), 0.0, 0.0, np.sin(0.5 * spin))
     norm = np.sqrt(w * w + x * x + y * y + z * z)
-    q[i, 0] = w / norm
-    q[i, 1] = x / norm
-    q[i, 2] = y / norm
-    q[i, 3] = z / norm
+    return w / norm, x / norm, y / norm, z / norm
+
+
+@njit
+def free_rotate(q, i, l0, l1, l2, ux, uy, uz, i_perp, i_axis, dt):
+    """:func:`rotate_top` applied to ``q[i]`` in place."""
+    q[i, 0], q[i, 1], q[i, 2], q[i, 3] = rotate_top(q[i, 0], q[i, 1], q[i, 2], q[i, 3], l0, l1,
+                                                    l2, ux, uy, uz, i_perp, i_axis, dt)
 
 
 def quaternions_from_axes(u: np.ndarray) -> np.ndarray:

@@ -21,9 +21,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pysim import integrators as itg
-from pysim.contacts import REC_COLUMNS, pair_forces
+from pysim.contacts import REC_COLUMNS, pair_forces, worst_overlap
 from pysim.forces import LAW_IDS, contact_params
-from pysim.neighbors import build_pairs
+from pysim.neighbors import row_starts, transpose
 from pysim.state import State
 from pysim.walls import CYL_COLUMNS, PLANE_COLUMNS, wall_forces
 
@@ -153,6 +153,7 @@ class Simulation:
         self.sys[itg.GAMMA_ROT] = model.gamma_rot
         self.sys[itg.GX:itg.GZ + 1] = g
         self.sys[itg.SKIN] = self.skin
+        self.sys[itg.RODS] = 1.0 if np.any(self.half > 0) else 0.0
         for k in range(3):
             if s.periodic[k] and s.box[k] < 2.0 * (dmax + model.d_coh + self.skin):
                 raise ValueError(
@@ -169,9 +170,13 @@ class Simulation:
         if check_dt:
             self._check_dt()
         itg.wrap(s.x, s.box, s.periodic)
-        self.pi = np.zeros(0, np.int64)
-        self.pj = np.zeros(0, np.int64)
-        self.hist = np.zeros((0, 3))
+        self.pi = np.zeros(0, np.int32)
+        self.pj = np.zeros(0, np.int32)
+        self.hist = np.zeros((0, 3 if model.friction else 0))
+        self.x_ref = s.x.copy()
+        self.u_ref = s.u.copy() if self.sys[itg.RODS] else np.zeros((0, 3))
+        self.box_ref = s.box.copy()
+        self._index_pairs()
         self._rebuild()
         self.compute_forces()
 
@@ -209,16 +214,29 @@ class Simulation:
                     f"t_c = {t_c:.3g} of the lightest pair; use dt <= {t_c / 10:.3g} "
                     "(t_c/50 is usual)")
 
-    def _rebuild(self):
-        from pysim.neighbors import transfer_history
+    # the pair arrays travel through the kernels in the order of itg.PAIR_ARRAYS; pi, pj
+    # and hist are attributes (checkpoints store them, the index arrays are derived)
+    def _pairs(self) -> tuple:
+        return (self.pi, self.pj, self._istart, self._jstart, self._jk, self.hist, self._fj)
 
+    def _set_pairs(self, p):
+        self.pi, self.pj, self._istart, self._jstart, self._jk, self.hist, self._fj = p
+
+    def _index_pairs(self):
+        """Derive the row starts, the transposed index and the reaction scratch from
+        ``pi``/``pj`` (after a checkpoint load)."""
+        n = self.state.n
+        self.pi = np.ascontiguousarray(self.pi, dtype=np.int32)
+        self.pj = np.ascontiguousarray(self.pj, dtype=np.int32)
+        self._istart = row_starts(self.pi, n)
+        self._jstart, self._jk = transpose(self.pj, n)
+        self._fj = np.empty((len(self.pi), 6))
+
+    def _rebuild(self):
         s = self.state
-        pi, pj = build_pairs(s.x, self.r_int, s.box, s.periodic, self.skin)
-        self.hist = transfer_history(self.pi, self.pj, self.hist, pi, pj)
-        self.pi, self.pj = pi, pj
-        self.x_ref = s.x.copy()
-        self.box_ref = s.box.copy()
-        self.sys[itg.RINT_BUILD] = float(self.r_int.max())
+        self._set_pairs(itg.rebuild(s.x, s.u, s.box, s.periodic, self.r_int, self.half, self.sys,
+                                    self._istart, self.pj, self.hist, self._fj, self.x_ref,
+                                    self.u_ref, self.box_ref))
         self.rebuilds += 1
 
     def compute_forces(self):
@@ -226,10 +244,10 @@ class Simulation:
         whatever ``state.v`` holds)."""
         s = self.state
         self._pe, self._nc, self._nw = itg.forces(
-            s.x, s.v, s.omega, s.u, s.radius, self.half, s.mass, s.box, s.periodic, self.pi,
-            self.pj, self.hist, self.model.law_id, self._cp, self.model.friction, self.planes,
+            s.x, s.v, s.omega, s.u, s.radius, self.half, s.mass, s.box, s.periodic,
+            *self._pairs()[1:], self.model.law_id, self._cp, self.model.friction, self.planes,
             self.cyls, self._wp, self._wfriction, self.whist, self.wall_force, self.sys, s.time,
-            self.dt, self.f, self.torque, self.virial)
+            self.dt, self.f, self.torque, self.virial, True)
 
     def _check(self, what: str):
         s = self.state
@@ -240,15 +258,13 @@ class Simulation:
                 f"{what}: non-finite positions or velocities at step {s.step} for particles "
                 f"(0-based) {ids[:10].tolist()}; reduce dt (now {self.dt:g}) or the driving rate")
         if self._nc:
-            ij, rec = self.contact_table()
-            if len(rec):
-                dmin = 2.0 * np.minimum(s.radius[ij[:, 0]], s.radius[ij[:, 1]])
-                frac = rec[:, 6] / dmin
-                worst = int(np.argmax(frac))
-                if frac[worst] > self.max_overlap:
-                    a, b = ij[worst]
+            frac, k = worst_overlap(s.x, s.u, s.radius, self.half, s.box, s.periodic, self.pi,
+                                    self.pj, self.sys[itg.RODS] != 0.0)
+            if k >= 0:
+                if frac > self.max_overlap:
+                    a, b = int(self.pi[k]), int(self.pj[k])
                     raise BlowUpError(
-                        f"{what}: overlap {frac[worst]:.3g} of a diameter between particles "
+                        f"{what}: overlap {frac:.3g} of a diameter between particles "
                         f"(0-based) {a} and {b} at step {s.step} exceeds {self.max_overlap}; "
                         f"reduce dt (now {self.dt:g}) or the driving rate, or stiffen k_n")
 
@@ -264,12 +280,13 @@ class Simulation:
         rate[~s.periodic] = 0.0
         self.sys[itg.EPS_X:itg.EPS_Z + 1] = rate
         self.sys[itg.GROWTH] = growth_rate
-        (self.pi, self.pj, self.hist, self._pe, self._nc, self._nw, nreb) = itg.verlet_chunk(
+        (*pairs, self._pe, self._nc, self._nw, nreb) = itg.verlet_chunk(
             s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half, self.r_int,
-            s.mass, s.inertia, s.box, s.periodic, self.pi, self.pj, self.hist, self.x_ref,
+            s.mass, s.inertia, s.box, s.periodic, *self._pairs(), self.x_ref, self.u_ref,
             self.box_ref, self.model.law_id, self._cp, self.model.friction, self.planes,
             self.cyls, self._wp, self._wfriction, self.whist, self.wall_force, self.sys,
             self._clock(), self.dt, int(nsteps), self.virial)
+        self._set_pairs(pairs)
         self.rebuilds += nreb
         if growth_rate:
             s.length[:] = 2.0 * self.half
@@ -290,11 +307,12 @@ class Simulation:
         self.sys[itg.EPS_X:itg.EPS_Z + 1] = rate
         self.sys[itg.K_D] = k_d
         msize = s.mass / s.density
-        (self.pi, self.pj, self.hist, self._pe, self._nc, nreb) = itg.heun_chunk(
+        (*pairs, self._pe, self._nc, nreb) = itg.heun_chunk(
             s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half, self.r_int,
-            s.mass, s.inertia, msize, s.box, s.periodic, self.pi, self.pj, self.hist, self.x_ref,
+            s.mass, s.inertia, msize, s.box, s.periodic, *self._pairs(), self.x_ref, self.u_ref,
             self.box_ref, self.model.law_id, self._cp, self.planes, self.cyls, self._wp,
             self.wall_force, self.sys, self._clock(), self.dt, int(nsteps), self.virial)
+        self._set_pairs(pairs)
         self.sys[itg.EPS_X:itg.EPS_Z + 1] = 0.0
         self.rebuilds += nreb
         self._advance_clock(nsteps)

@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pysim.forces import D_COH, cohesion_force, normal_force, tangential_force
+from pysim.forces import (D_COH, F_COH, GAMMA_N, GAMMA_T, K_N, K_T, MU, cohesion_force,
+                          normal_force, tangential_force)
 from pysim.jit import njit
 
 PLANE_COLUMNS = 10
@@ -67,15 +68,19 @@ def _wall_contact(i, e0, e1, e2, n0, n1, n2, delta, wv0, wv1, wv2, x, v, omega, 
     vn = vr0 * n0 + vr1 * n1 + vr2 * n2
     fn = 0.0
     if delta > 0.0:
-        fn = normal_force(law, wp, delta, vn, 2.0 * radius[i])
-    fn += cohesion_force(wp, delta)
+        fn = normal_force(law, wp[K_N], wp[GAMMA_N], delta, vn, 2.0 * radius[i])
+    fn += cohesion_force(wp[F_COH], wp[D_COH], delta)
     ft0 = 0.0
     ft1 = 0.0
     ft2 = 0.0
     if friction:
         if delta > 0.0:
-            ft0, ft1, ft2 = tangential_force(wp, fn, whist, h, n0, n1, n2, vr0 - vn * n0,
-                                             vr1 - vn * n1, vr2 - vn * n2, dt)
+            ft0, ft1, ft2, x0, x1, x2 = tangential_force(
+                wp[K_T], wp[GAMMA_T], wp[MU], fn, whist[h, 0], whist[h, 1], whist[h, 2], n0, n1,
+                n2, vr0 - vn * n0, vr1 - vn * n1, vr2 - vn * n2, dt)
+            whist[h, 0] = x0
+            whist[h, 1] = x1
+            whist[h, 2] = x2
         else:
             whist[h, 0] = 0.0
             whist[h, 1] = 0.0
