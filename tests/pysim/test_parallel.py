@@ -1,0 +1,175 @@
+"""The threaded kernels: the same bits on 1 and 2 threads, the same forces as the serial
+loop and the NumPy reference, a complete rod-aware Verlet list, and a short trajectory
+against a NumPy velocity-Verlet reference."""
+import numba
+import numpy as np
+import pytest
+
+from pysim import State
+from pysim.contacts import FJ_COLUMNS, pair_forces, pair_pass, reduce_pass
+from pysim.forces import HOOKE, contact_params
+from pysim.geometry import segment_distance
+from pysim.initial import random_spheres, random_spherocylinders
+from pysim.jit import get_threads, set_threads
+from pysim.neighbors import all_pairs, build_list, list_is_stale
+from pysim.simulation import ContactModel, Simulation
+from tests.pysim.test_contacts import random_rods, reference
+
+PER = np.ones(3, bool)
+
+
+def threaded(x, u, r, half, v, w, box, p, friction, hist=None, skin=0.3):
+    n = len(x)
+    pi, pj, istart, jstart, jk = build_list(x, u, r + half, half, box, PER, skin)
+    hist = np.zeros((len(pi), 3)) if hist is None else hist
+    f = np.empty((n, 3))
+    tq = np.empty((n, 3))
+    vir = np.zeros((3, 3))
+    fj = np.empty((len(pi), FJ_COLUMNS))
+    pe, nc = pair_pass(x, v, w, u, r, half, box, PER, pj, istart, hist, HOOKE, p, friction,
+                       1e-4, bool(np.any(half > 0)), f, tq, fj, True, vir)
+    reduce_pass(f, tq, jstart, jk, fj, v, w, np.ones(n), 0.0, 0.0, 0.0, 0.0, 0.0, False)
+    return f, tq, vir, pe, nc, (pi, pj, hist)
+
+
+@pytest.mark.parametrize("friction", [False, True])
+def test_threaded_pass_equals_serial_loop_and_reference(rng, friction):
+    box = np.full(3, 9.0)
+    x, u, r, half, v, w = random_rods(rng, 220, box, 3.0)
+    p = contact_params(1e4, 5.0, k_t=5e3, gamma_t=1.0, mu=0.5 if friction else 0.0)
+    f, tq, vir, pe, nc, (pi, pj, hist) = threaded(x, u, r, half, v, w, box, p, friction)
+    ai, aj = all_pairs(x, r + half, box, PER, 100.0)
+    f2, tq2, vir2 = np.zeros((len(x), 3)), np.zeros((len(x), 3)), np.zeros((3, 3))
+    hist2 = np.zeros((len(ai), 3))
+    pe2, nc2 = pair_forces(x, v, w, u, r, half, box, PER, ai, aj, hist2, HOOKE, p, friction,
+                           1e-4, f2, tq2, vir2, False, np.empty((0, 2), np.int64),
+                           np.empty((0, 10)))
+    assert nc == nc2 > 100
+    for a, b in ((f, f2), (tq, tq2), (vir, vir2)):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-9)
+    assert pe == pytest.approx(pe2, rel=1e-12)
+    if friction:  # the springs of the touching pairs are the same
+        touching = {(a, b): h for a, b, h in zip(ai, aj, hist2) if np.any(h)}
+        listed = {(a, b): h for a, b, h in zip(pi, pj, hist) if np.any(h)}
+        assert touching.keys() == listed.keys()
+        for key in touching:
+            np.testing.assert_array_equal(touching[key], listed[key])
+    else:
+        f_ref, tq_ref, vir_ref, pe_ref, nc_ref = reference(x, u, r, half, v, w, box, HOOKE, p)
+        assert nc == nc_ref
+        np.testing.assert_allclose(f, f_ref, rtol=1e-10, atol=1e-8)
+        np.testing.assert_allclose(tq, tq_ref, rtol=1e-10, atol=1e-8)
+
+
+def test_rod_list_holds_every_pair_within_reach(rng):
+    """build_list against brute-force spine distances, with and without a skin."""
+    box = np.full(3, 8.0)
+    x, u, r, half, *_ = random_rods(rng, 150, box, 4.0)
+    for skin in (0.0, 0.4):
+        pi, pj, istart, jstart, jk = build_list(x, u, r + half, half, box, PER, skin)
+        want = set()
+        for i in range(len(x)):
+            for j in range(i + 1, len(x)):
+                d = x[j] - x[i]
+                d -= box * np.round(d / box)
+                if segment_distance(np.zeros(3), u[i], half[i], d, u[j], half[j]) < r[i] + r[j] + skin:
+                    want.add((i, j))
+        got = list(zip(pi.tolist(), pj.tolist()))
+        assert set(got) == want and got == sorted(got) and len(want) > 50
+        np.testing.assert_array_equal(np.diff(istart), np.bincount(pi, minlength=len(x)))
+        assert all(pj[jk[jstart[q]:jstart[q + 1]]].tolist() == [q] * (jstart[q + 1] - jstart[q])
+                   for q in range(len(x)))
+
+
+def test_list_is_stale_never_misses_a_rod_contact(rng):
+    """Rods translating, rotating and compressed: whenever the list is said to be good,
+    every pair in contact range is in it."""
+    n = 120
+    x, u, r, length, box = random_spherocylinders(np.full(n, 0.5), np.full(n, 3.0), 0.2, 4)
+    half = length / 2
+    r_int = r + half
+    skin = 0.3
+    pi, pj, *_ = build_list(x, u, r_int, half, box, PER, skin)
+    x_ref, u_ref, box_ref = x.copy(), u.copy(), box.copy()
+    checked = 0
+    for _ in range(300):
+        box = box * np.exp(-0.001)
+        x = x * np.exp(-0.001) + rng.normal(0, 0.003, x.shape)
+        u = u + rng.normal(0, 0.004, u.shape)
+        u /= np.linalg.norm(u, axis=1, keepdims=True)
+        x %= box
+        if list_is_stale(x, x_ref, u, u_ref, half, box, box_ref, PER, 2 * r.max(), half.max(),
+                         skin, 1.0):
+            pi, pj, *_ = build_list(x, u, r_int, half, box, PER, skin)
+            x_ref, u_ref, box_ref = x.copy(), u.copy(), box.copy()
+            continue
+        ti, tj, *_ = build_list(x, u, r_int, half, box, PER, 0.0)
+        assert set(zip(ti.tolist(), tj.tolist())) <= set(zip(pi.tolist(), pj.tolist()))
+        checked += 1
+    assert checked > 100
+
+
+def dense_rods_with_friction():
+    rng = np.random.default_rng(5)
+    n = 300
+    x, u, r, length, box = random_spherocylinders(np.full(n, 0.5), rng.uniform(0, 3, n), 0.3, 8)
+    v = rng.normal(0, 1.0, (n, 3))
+    w = rng.normal(0, 1.0, (n, 3))
+    st = State.create(x, r, length, box, axis=u, v=v, omega=w)
+    model = ContactModel("hooke", 1e5, 30.0, k_t=3e4, gamma_t=5.0, mu=0.4, gamma_bg=0.5)
+    return Simulation(st, model, dt=5e-5)
+
+
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 Numba threads")
+def test_one_and_two_threads_give_identical_bits():
+    before = get_threads()
+    out = []
+    try:
+        for threads in (1, 2):
+            set_threads(threads)
+            sim = dense_rods_with_friction()
+            sim.run(1500, strain_rate=-3.0)
+            out.append(sim)
+    finally:
+        set_threads(before)
+    a, b = out
+    assert a.thermo().n_contacts > 50 and np.abs(a.hist).max() > 0
+    for k in ("x", "v", "q", "omega"):
+        np.testing.assert_array_equal(getattr(a.state, k), getattr(b.state, k), err_msg=k)
+    for k in ("f", "torque", "virial", "hist", "pi", "pj"):
+        np.testing.assert_array_equal(getattr(a, k), getattr(b, k), err_msg=k)
+    assert a._pe == b._pe
+
+
+def test_short_trajectory_against_numpy_velocity_verlet():
+    """Frictionless spheres: 200 steps of pysim against velocity Verlet written in
+    NumPy with the reference forces of test_contacts (all pairs, no Verlet list)."""
+    x, d, box = random_spheres(np.ones(80), 0.35, seed=6)
+    rng = np.random.default_rng(2)
+    v = rng.normal(0, 5.0, x.shape)
+    st = State.spheres(x, d / 2, box, v=v)
+    model = ContactModel("hooke", 1e5, 20.0)
+    dt = 2e-5
+    sim = Simulation(st, model, dt=dt)
+    n = len(x)
+    xr, vr, r = st.x.copy(), st.v.copy(), st.radius.copy()
+    m = st.mass
+    zeros = np.zeros((n, 3))
+    u = np.tile([0.0, 0.0, 1.0], (n, 1))
+    p = contact_params(1e5, 20.0)
+
+    def force(xx, vv):
+        out = reference(xx, u, r, np.zeros(n), vv, zeros, box, HOOKE, p)
+        return out[0], out[4]
+
+    f, touching = force(xr, vr)
+    for _ in range(200):
+        vr += 0.5 * dt * f / m[:, None]
+        xr = (xr + dt * vr) % box
+        f, nc = force(xr, vr)
+        touching += nc
+        vr += 0.5 * dt * f / m[:, None]
+    sim.run(200)
+    assert touching > 100
+    np.testing.assert_allclose(st.x, xr, rtol=0, atol=1e-11)
+    np.testing.assert_allclose(st.v, vr, rtol=1e-9, atol=1e-9)
