@@ -11,7 +11,7 @@ CONFIG  ?= workflows/config/quick.yaml
 RESULTS ?= results
 STAMP   := $(VENV)/.stamp-setup
 
-.PHONY: setup liggghts run test doctor lint clean
+.PHONY: setup liggghts run test doctor lint clean bench
 
 setup: $(STAMP) liggghts
 
@@ -53,6 +53,10 @@ doctor: setup
 
 lint: setup
 	$(VENV)/bin/snakemake --lint --configfile $(CONFIG)
+
+# pysim against LAMMPS and LIGGGHTS, alternating, on this machine: results/bench.csv + .png
+bench: setup
+	$(PY) -m workflows.bench --out $(RESULTS)/bench.csv
 
 clean:
 	rm -rf $(RESULTS) .snakemake

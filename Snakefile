@@ -17,6 +17,7 @@ include: "workflows/rules/init.smk"
 include: "workflows/rules/engines.smk"
 include: "workflows/rules/analysis.smk"
 include: "workflows/rules/report.smk"
+include: "workflows/rules/bench.smk"
 
 
 rule all:

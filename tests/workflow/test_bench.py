@@ -1,0 +1,40 @@
+"""A tiny run of the benchmark driver: every case, the CSV columns, the ratios, the plot."""
+import csv
+
+import numpy as np
+
+from workflows import bench
+from workflows.glued import glued_spheres, write_glued_rods_data
+
+
+def test_tiny_bench_writes_every_case(tmp_path):
+    out = tmp_path / "bench.csv"
+    rows = bench.run(out, n_spheres=300, n_rods=200, steps=20, rod_steps=10, repeats=1,
+                     cores=(1,), engines=("pysim", "lammps-legacy"), scaling=(300,),
+                     scaling_steps=5, log=lambda *a: None)
+    with open(out) as fh:
+        table = list(csv.DictReader(fh))
+    assert list(table[0]) == bench.FIELDS
+    cases = {(r["case"], r["engine"]) for r in table}
+    assert {("spheres_friction", "pysim"), ("spheres_friction", "lammps-legacy"),
+            ("spheres_frictionless", "pysim"), ("rods_a4", "pysim"), ("rods_a4", "lammps-rigid"),
+            ("scaling_spheres", "pysim"), ("scaling_rods", "pysim")} <= cases
+    assert all(float(r["seconds"]) > 0 and float(r["throughput"]) > 0 for r in table)
+    q = bench.ratios(rows)
+    assert {(c, p) for c, _, p, *_ in q} >= {("spheres_friction", "lammps-legacy"),
+                                              ("rods_a4", "lammps-rigid")}
+    bench.plot(rows, tmp_path / "bench.png")
+    assert (tmp_path / "bench.png").stat().st_size > 1000
+
+
+def test_glued_rods_have_nine_spheres_at_half_diameter_spacing(tmp_path):
+    x = np.array([[1.0, 2.0, 3.0]])
+    u = np.array([[0.0, 0.6, 0.8]])
+    c, mol = glued_spheres(x, u, 0.5, 4.0, 9)
+    np.testing.assert_allclose(np.linalg.norm(np.diff(c, axis=0), axis=1), 0.5)
+    np.testing.assert_allclose(c.mean(axis=0), x[0])
+    assert mol.tolist() == [1] * 9
+    vol = write_glued_rods_data(tmp_path / "g.data", x, u, 0.5, 4.0, [10, 10, 10], 9, 2.0)
+    assert vol == np.pi * 4 / 4 + np.pi / 6
+    text = (tmp_path / "g.data").read_text()
+    assert "9 atoms" in text and "Molecules" in text
