@@ -333,17 +333,36 @@ class Simulation:
         saved_sys = self.sys
         self.sys = sys
         self.compute_forces()
-        (self.pi, self.pj, self.hist, self._pe, self._nc, it, fmax, tmax) = itg.fire_chunk(
+        (*pairs, self._pe, self._nc, it, fmax, tmax) = itg.fire_chunk(
             s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half, self.r_int,
-            s.mass, s.inertia, s.box, s.periodic, self.pi, self.pj, self.hist, self.x_ref,
+            s.mass, s.inertia, s.box, s.periodic, *self._pairs(), self.x_ref, self.u_ref,
             self.box_ref, self.model.law_id, self._cp, self.planes, self.cyls, self._wp,
             self.wall_force, sys, fire, int(max_iter), float(f_tol), self.virial)
-        saved_sys[itg.RINT_BUILD] = sys[itg.RINT_BUILD]
+        self._set_pairs(pairs)
+        saved_sys[itg.RINT_BUILD:itg.RINT_BUILD + 1] = sys[itg.RINT_BUILD:itg.RINT_BUILD + 1]
+        saved_sys[itg.RC_BUILD:itg.HALF_BUILD + 1] = sys[itg.RC_BUILD:itg.HALF_BUILD + 1]
         self.sys = saved_sys
         s.v[:] = 0.0
         s.omega[:] = 0.0
         self._check("FIRE")
         return int(it), float(fmax), float(tmax)
+
+    def rescale_particles(self, factor: float):
+        """Scale every particle's ``R`` and ``L`` by ``factor`` at fixed centres, axes and
+        box (mass by ``factor^d``, inertia by ``factor^(d+2)``), then recompute forces:
+        the packing fraction changes by ``factor^d``."""
+        if not factor > 0:
+            raise ValueError(f"scale factor must be > 0, got {factor}")
+        s = self.state
+        d = s.dimension
+        s.radius *= factor
+        s.length *= factor
+        self.half *= factor
+        self.r_int *= factor
+        s.mass *= factor**d
+        s.inertia *= factor ** (d + 2)
+        self._rebuild()
+        self.compute_forces()
 
     def stress(self) -> np.ndarray:
         """Contact stress ``sigma_ab = (1/V) sum_c l^c_a F^c_b`` (tension positive) of the

@@ -105,3 +105,4 @@ class RunFiles:
         for p in self.paths.values():
             io.finalize(p)
         self.ckpt.unlink(missing_ok=True)
+        io.part_path(self.ckpt).unlink(missing_ok=True)  # a checkpoint cut short by a kill
