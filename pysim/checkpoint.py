@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pysim.integrators import RODS, SYS_SIZE
+from pysim.integrators import DIM2, RODS, SYS_SIZE
 from pysim.simulation import ContactModel, Simulation
 from pysim.state import State
 
@@ -93,6 +93,7 @@ def load(path) -> tuple[Simulation, dict]:
         sys = np.zeros(SYS_SIZE)
         sys[:len(sim.sys)] = sim.sys
         sys[RODS] = 1.0 if np.any(sim.half > 0) else 0.0
+        sys[DIM2] = 1.0 if state.dimension == 2 else 0.0
         sim.sys = sys
         sim.u_ref = state.u.copy() if sys[RODS] else np.zeros((0, 3))
         sim._rebuild()

@@ -43,10 +43,12 @@ from pysim.neighbors import build_list, list_is_stale, transfer_rows
 from pysim.rotation import axis_from, axis_of, free_rotate, rotate_top
 from pysim.walls import wall_forces
 
+SQRT_HALF = np.sqrt(0.5)
+
 # indices into the 'sys' scalar array
 (GAMMA_BG, GAMMA_ROT, GX, GY, GZ, EPS_X, EPS_Y, EPS_Z, GROWTH, SKIN, RINT_BUILD, K_D,
- RC_BUILD, HALF_BUILD, RODS) = range(15)
-SYS_SIZE = 15
+ RC_BUILD, HALF_BUILD, RODS, DIM2) = range(16)
+SYS_SIZE = 16
 
 #: The pair arrays, passed and returned in this order by the kernels: the Verlet list
 #: (:func:`pysim.neighbors.build_list`: ``pi``, ``pj``, ``istart``, ``jstart``, ``jk``),
@@ -158,7 +160,18 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pj, istart, jstart
                          whist, dt, f, torque, wall_force, False, no_ij, no_rec)
         if body:
             _body(f, torque, v, omega, mass, gx, gy, gz, gb, gr)
+    if sys[DIM2] != 0.0:
+        _planar_forces(f, torque)
     return pe, nc, nw
+
+
+@pnjit
+def _planar_forces(f, torque):
+    """2-D: no force out of the plane, no torque in it (``fix enforce2d``)."""
+    for i in prange(f.shape[0]):
+        f[i, 2] = 0.0
+        torque[i, 0] = 0.0
+        torque[i, 1] = 0.0
 
 
 @njit
@@ -212,9 +225,11 @@ def _rotate_free(q, u, omega, inertia, half, dt):
 
 
 @pnjit
-def _first_half(x, v, q, u, omega, f, torque, mass, inertia, half, box, periodic, h, dt):
+def _first_half(x, v, q, u, omega, f, torque, mass, inertia, half, box, periodic, h, dt, dim2):
     """Steps 1-2 of velocity Verlet for every particle: half kick, drift, free rotation
-    (rods), wrap."""
+    (rods), wrap. In 2-D (``dim2``) the motion is kept in the plane exactly, as LAMMPS'
+    ``fix enforce2d`` does: ``v_z = 0``, ``omega = (0, 0, w_z)``, spines in the plane (the
+    quaternion rebuilt from the planar spine, rounding would tilt it slowly otherwise)."""
     b0, b1, b2 = box[0], box[1], box[2]
     p0, p1, p2 = periodic[0], periodic[1], periodic[2]
     for i in prange(x.shape[0]):
@@ -231,10 +246,31 @@ def _first_half(x, v, q, u, omega, f, torque, mass, inertia, half, box, periodic
         x0 = x[i, 0] + dt * v0
         x1 = x[i, 1] + dt * v1
         x2 = x[i, 2] + dt * v2
+        if dim2:
+            v[i, 2] = 0.0
+            x2 = 0.0
+            w0 = 0.0
+            w1 = 0.0
         if half[i] > 0.0:
             (q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2], w0, w1,
              w2) = free_step(q[i, 0], q[i, 1], q[i, 2], q[i, 3], u0, u1, u2, w0, w1, w2, ip, ia,
                              dt)
+            if dim2:
+                a0 = u[i, 0]
+                a1 = u[i, 1]
+                an = np.sqrt(a0 * a0 + a1 * a1)
+                a0 /= an
+                a1 /= an
+                u[i, 0] = a0
+                u[i, 1] = a1
+                u[i, 2] = 0.0
+                # shortest arc from e_z to (a0, a1, 0): (1, -a1, a0, 0) / sqrt(2)
+                q[i, 0] = SQRT_HALF
+                q[i, 1] = -a1 * SQRT_HALF
+                q[i, 2] = a0 * SQRT_HALF
+                q[i, 3] = 0.0
+                w0 = 0.0
+                w1 = 0.0
         omega[i, 0] = w0
         omega[i, 1] = w1
         omega[i, 2] = w2
@@ -295,14 +331,17 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
         if sys[EPS_X + k] != 0.0:
             scale[k] = np.exp(sys[EPS_X + k] * dt)
             deform = True
+    dim2 = sys[DIM2] != 0.0
     sc = 1.0
     if sys[GROWTH] != 0.0:
         sc = np.exp(sys[GROWTH] * dt)
-    sc3 = sc * sc * sc
+    # mass grows with the volume (area in 2-D), inertia with mass times length squared
+    sc3 = sc * sc if dim2 else sc * sc * sc
     sc5 = sc3 * sc * sc
     for k in range(nsteps):
         t = clock[0] + (clock[2] + k + 1 - clock[1]) * dt
-        _first_half(x, v, q, u, omega, f, torque, mass, inertia, half, box, periodic, h, dt)
+        _first_half(x, v, q, u, omega, f, torque, mass, inertia, half, box, periodic, h, dt,
+                    dim2)
         pi, pj, istart, jstart, jk, hist, fj, rebuilt = maybe_rebuild(
             x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,
             u_ref, box_ref)

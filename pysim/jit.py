@@ -4,7 +4,8 @@ Every kernel in pysim is compiled with ``JIT_FLAGS``; the few kernels that run t
 particle or pair loops on several threads (``numba.prange``) use ``PARALLEL_FLAGS``, the
 same flags plus ``parallel=True``. ``fastmath`` stays off: the reference engine must give
 bit-identical results for the same seed. ``cache`` makes the second start of the CLI
-fast (compiled code is stored next to the sources, in ``__pycache__``).
+fast (compiled code is stored in ``pysim/__pycache__/numba-<hash of the sources>``, so
+that editing any kernel recompiles every kernel that may have inlined it).
 
 Helpers called once per pair or per particle take and return scalars only: an array
 argument costs two atomic reference-count updates per call, more than a contact law.
@@ -19,7 +20,42 @@ readable tracebacks and real coverage).
 """
 from __future__ import annotations
 
+import hashlib
+import os
+import shutil
+from pathlib import Path
+
 import numba
+
+
+def _source_hash() -> str:
+    """Hash of every pysim source file: Numba's cache notices a change in a kernel's own
+    file but not in the files of the kernels it calls, and a stale cached kernel can then
+    run with a changed callee (wrong results or a crash). Keying the cache directory by
+    the hash of all sources rules that out."""
+    h = hashlib.sha256()
+    root = Path(__file__).resolve().parent
+    for p in sorted(root.rglob("*.py")):
+        h.update(str(p.relative_to(root)).encode())
+        h.update(p.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def _use_versioned_cache() -> None:
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return  # the user chose a cache directory
+    base = Path(__file__).resolve().parent / "__pycache__"
+    current = base / f"numba-{_source_hash()}"
+    numba.config.CACHE_DIR = str(current)
+    try:  # drop caches of earlier sources
+        for old in base.glob("numba-*"):
+            if old != current:
+                shutil.rmtree(old, ignore_errors=True)
+    except OSError:
+        pass
+
+
+_use_versioned_cache()
 
 JIT_FLAGS = dict(cache=True, fastmath=False, nogil=True, error_model="numpy")
 PARALLEL_FLAGS = dict(JIT_FLAGS, parallel=True)

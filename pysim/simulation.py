@@ -154,6 +154,7 @@ class Simulation:
         self.sys[itg.GX:itg.GZ + 1] = g
         self.sys[itg.SKIN] = self.skin
         self.sys[itg.RODS] = 1.0 if np.any(self.half > 0) else 0.0
+        self.sys[itg.DIM2] = 1.0 if s.dimension == 2 else 0.0
         for k in range(3):
             if s.periodic[k] and s.box[k] < 2.0 * (dmax + model.d_coh + self.skin):
                 raise ValueError(

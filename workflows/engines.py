@@ -23,7 +23,8 @@ import numpy as np
 from pysim import io
 
 PROJECT_ROOT = Path(__file__).resolve().parents[1]
-INPUTS = PROJECT_ROOT / "inputs"
+#: where the decks live; RODPACK_INPUTS points elsewhere (tests use it to break a deck)
+INPUTS = Path(os.environ.get("RODPACK_INPUTS", PROJECT_ROOT / "inputs"))
 
 
 class EngineError(RuntimeError):

@@ -60,8 +60,10 @@ def test_rods_compress_writes_axes_and_lengths(tmp_path):
     f, c = frames[-1]
     assert np.allclose(f.length, 1.5) and np.allclose(np.linalg.norm(f.axis, axis=1), 1.0)
     assert c.n > 200  # jammed rods: z well above 4
+    # the last thermo row is the last multiple of thermo_every (500 steps, phi grows by
+    # 3 rate dt 500 = 0.75 % per row): within one row of the target
     th = RunData(out).thermo
-    assert th.phi.iloc[-1] == pytest.approx(0.7, abs=2e-3)
+    assert 0.7 * (1 - 3 * 0.05 * 1e-4 * 500) <= th.phi.iloc[-1] <= 0.7
 
 
 def test_two_dimensional_compress(tmp_path):

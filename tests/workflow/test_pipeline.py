@@ -37,7 +37,7 @@ def test_pipeline_end_to_end(tmp_path):
     results = tmp_path / "results"
     cfg = tmp_path / "tiny.yaml"
     cfg.write_text(yaml.safe_dump(tiny_config(results)))
-    base = [SNAKEMAKE, "--snakefile", str(ROOT / "Snakefile"), "--directory", str(ROOT),
+    base = [SNAKEMAKE, "--snakefile", str(ROOT / "Snakefile"), "--directory", str(tmp_path),
             "--configfile", str(cfg)]
     r = subprocess.run(base + ["--cores", "2", "--quiet", "all"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr[-3000:]
@@ -72,7 +72,7 @@ def test_bad_config_stops_before_anything_runs(tmp_path):
     p = tmp_path / "bad.yaml"
     p.write_text(yaml.safe_dump(cfg))
     r = subprocess.run([SNAKEMAKE, "--snakefile", str(ROOT / "Snakefile"), "--directory",
-                        str(ROOT), "--configfile", str(p), "--cores", "1", "--dry-run"],
+                        str(tmp_path), "--configfile", str(p), "--cores", "1", "--dry-run"],
                        capture_output=True, text=True)
     assert r.returncode != 0
     assert "protocol.phi_final = 1.3 is not allowed" in r.stderr

@@ -1,0 +1,127 @@
+"""Failures are results: a broken deck, an unstable case or an interrupted pipeline never
+stops the other runs, never leaves half-written files as results, and shows up in the
+report."""
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[2]
+SNAKEMAKE = str(Path(sys.executable).parent / "snakemake")
+ENGINES = ["lammps"] + (["liggghts"] if shutil.which("liggghts") else [])
+
+
+def config(results, engines=ENGINES, variants=None, seeds=(1,)):
+    return {
+        "results": str(results),
+        "studies": {"sphere_jamming": {
+            "engines": list(engines), "seeds": list(seeds),
+            "case": {
+                "particles": {"n": 150, "diameter": {"mean": 1.0}},
+                "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 300.0, "gamma_bg": 1.0},
+                "protocol": {"name": "compress", "phi_init": 0.3, "phi_fast": 0.55,
+                             "rate_fast": 0.2, "rate": 0.05, "phi_final": 0.68, "dt": 1e-4},
+                "output": {"thermo_every": 500, "dump_every": 2000},
+            },
+            "variants": variants or {"base": {}},
+        }},
+    }
+
+
+def snakemake(cfg_path, *extra, env=None, cores="2"):
+    """Run the project's Snakefile with its own working directory (beside the config),
+    so that tests never share Snakemake's lock and metadata with each other or with a
+    pipeline the user is running."""
+    return [SNAKEMAKE, "--snakefile", str(ROOT / "Snakefile"), "--directory",
+            str(Path(cfg_path).parent), "--configfile", str(cfg_path), "--cores", cores,
+            "--quiet", *extra]
+
+
+@pytest.mark.engines
+def test_broken_deck_is_reported_and_the_rest_runs(tmp_path):
+    inputs = tmp_path / "inputs"
+    shutil.copytree(ROOT / "inputs", inputs)
+    deck = inputs / "lammps" / "in.spheres.compress"
+    deck.write_text(deck.read_text().replace("read_data       ${data}",
+                                             "read_data       ${data}\nthis_is_not_a_command 1"))
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text(yaml.safe_dump(config(tmp_path / "results", engines=["lammps", "liggghts"]
+                                         if "liggghts" in ENGINES else ["lammps"],
+                                         seeds=(1, 2))))
+    env = dict(os.environ, RODPACK_INPUTS=str(inputs))
+    r = subprocess.run(snakemake(cfg), capture_output=True, text=True, env=env)
+    assert r.returncode == 0, r.stderr[-3000:]
+    res = tmp_path / "results"
+    fail = pd.read_csv(res / "failures.csv")
+    assert set(fail.engine) == {"lammps"} and len(fail) == 2
+    assert fail.error.str.contains("ERROR: Unknown command: this_is_not_a_command 1").all()
+    assert fail.log.map(lambda p: Path(p).exists()).all()
+    for seed in (1, 2):
+        run = res / "sphere_jamming" / "base" / f"seed{seed}" / "lammps"
+        assert not (run / "thermo.dat").exists() and not (run / "particles.dump").exists()
+    summary = pd.read_csv(res / "summary.csv")
+    assert "lammps" not in set(summary.engine)
+    if "liggghts" in ENGINES:
+        assert set(summary.engine) == {"liggghts"}
+
+
+@pytest.mark.engines
+def test_unstable_case_is_a_reported_blow_up(tmp_path):
+    cfg = tmp_path / "cfg.yaml"
+    variants = {"ok": {}, "unstable": {"contact": {"k_n": 100.0},
+                                       "protocol": {"dt": 1e-3, "rate": 0.5, "rate_fast": 1.0}}}
+    cfg.write_text(yaml.safe_dump(config(tmp_path / "results", engines=["lammps"],
+                                         variants=variants)))
+    r = subprocess.run(snakemake(cfg), capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr[-3000:]
+    fail = pd.read_csv(tmp_path / "results" / "failures.csv")
+    assert list(fail.case) == ["unstable"]
+    assert fail.error.iloc[0].startswith("lammps failed") or "blew up" in fail.error.iloc[0] \
+        or "dangerous" in fail.error.iloc[0]
+    summary = pd.read_csv(tmp_path / "results" / "summary.csv")
+    assert set(summary.case) == {"ok"}
+
+
+@pytest.mark.engines
+def test_killed_pipeline_finishes_on_rerun_with_the_same_summary(tmp_path):
+    ref = tmp_path / "ref"
+    cfg_ref = tmp_path / "ref.yaml"
+    cfg_ref.write_text(yaml.safe_dump(config(ref, engines=["lammps"], seeds=(1, 2, 3))))
+    r = subprocess.run(snakemake(cfg_ref, cores="1"), capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr[-3000:]
+
+    res = tmp_path / "killed"
+    cfg = tmp_path / "killed.yaml"
+    cfg.write_text(yaml.safe_dump(config(res, engines=["lammps"], seeds=(1, 2, 3))))
+    proc = subprocess.Popen(snakemake(cfg, cores="1"), stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, start_new_session=True)
+    deadline = time.time() + 300
+
+    def running():  # an engine run under way: its work directory exists, its run.json not
+        return [d for d in res.glob("sphere_jamming/base/seed*/lammps")
+                if (d / "work" / "screen.txt").exists() and not (d / "run.json").exists()]
+
+    while time.time() < deadline:
+        if list(res.glob("sphere_jamming/base/seed*/lammps/run.json")) and running():
+            break
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGKILL)  # snakemake and the LAMMPS run it started
+    proc.wait()
+    assert not (res / "summary.csv").exists()
+    # Snakemake keeps its lock after a kill -9: the documented way on is --unlock
+    # ('make run' does it by itself when no other Snakemake runs in the directory)
+    subprocess.run(snakemake(cfg, "--unlock"), capture_output=True, text=True, check=True)
+    again = subprocess.run(snakemake(cfg, "--rerun-incomplete", cores="1"), capture_output=True,
+                           text=True)
+    assert again.returncode == 0, again.stderr[-3000:]
+    cols = ["study", "case", "engine", "seed", "observable", "value", "uncertainty"]
+    a = pd.read_csv(ref / "summary.csv")[cols]
+    b = pd.read_csv(res / "summary.csv")[cols]
+    pd.testing.assert_frame_equal(a, b)
