@@ -41,6 +41,7 @@ liggghts:
 	fi
 
 run: setup
+	$(PY) -m workflows.scripts.unlock_if_idle --configfile $(CONFIG)
 	$(VENV)/bin/snakemake --cores $(CORES) --configfile $(CONFIG) --keep-going --rerun-incomplete
 	$(VENV)/bin/snakemake --cores 1 --configfile $(CONFIG) --report $(RESULTS)/report.html
 	@echo "results: $(RESULTS)/summary.csv $(RESULTS)/comparison.csv $(RESULTS)/report.html"
