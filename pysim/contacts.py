@@ -32,8 +32,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pysim.forces import (D_COH, F_COH, GAMMA_N, GAMMA_T, K_N, K_T, MU, cohesion_force,
-                          elastic_energy, normal_force, tangential_force)
+from pysim.forces import (D_COH, F_COH, GAMMA_N, GAMMA_T, HERTZ, HOOKE, K_N, K_T, MU,
+                          cohesion_force, elastic_energy, normal_force, tangential_force)
 from pysim.geometry import closest_params
 from pysim.jit import njit, pnjit, prange
 
@@ -208,6 +208,177 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
                 if stats:
                     if delta > 0.0:
                         blk[b, 0] += elastic_energy(law, kn, delta, ri + rj)
+                    blk[b, 1] += 1.0
+                    blk[b, 2] += d0 * F0
+                    blk[b, 3] += d0 * F1
+                    blk[b, 4] += d0 * F2
+                    blk[b, 5] += d1 * F0
+                    blk[b, 6] += d1 * F1
+                    blk[b, 7] += d1 * F2
+                    blk[b, 8] += d2 * F0
+                    blk[b, 9] += d2 * F1
+                    blk[b, 10] += d2 * F2
+            f[i, 0] = s0
+            f[i, 1] = s1
+            f[i, 2] = s2
+            torque[i, 0] = q0
+            torque[i, 1] = q1
+            torque[i, 2] = q2
+    pe = 0.0
+    nc = 0
+    if stats:
+        tot = np.zeros(_STATS)
+        for b in range(nb):
+            for c in range(_STATS):
+                tot[c] += blk[b, c]
+        pe = tot[0]
+        nc = int(tot[1])
+        for a in range(3):
+            for c in range(3):
+                virial[a, c] = tot[2 + 3 * a + c]
+    return pe, nc
+
+
+@pnjit
+def sphere_pass(x, v, omega, radius, box, periodic, pj, istart, hist, law, p, friction, dt, f,
+                torque, fj, stats, virial):
+    """:func:`pair_pass` for spheres only (every ``L = 0``), with the geometry and the
+    normal laws written out in the loop: the same equations and the same outputs, about
+    twice as fast. The normal passes through both centres, so normal forces exert no
+    torque; with friction the tangential force does, ``c x F_t`` on i and ``-e x F_t``
+    on j (``c``, ``e`` the contact point relative to the centres). The minimum image is
+    taken by comparison with half the box (positions are wrapped into the box)."""
+    n = x.shape[0]
+    kn, gn, kt, gt, mu = p[K_N], p[GAMMA_N], p[K_T], p[GAMMA_T], p[MU]
+    fcoh, dcoh = p[F_COH], p[D_COH]
+    b0, b1, b2 = box[0], box[1], box[2]
+    hb0, hb1, hb2 = 0.5 * b0, 0.5 * b1, 0.5 * b2
+    p0, p1, p2 = periodic[0], periodic[1], periodic[2]
+    nb = (n + BLOCK - 1) // BLOCK
+    blk = np.zeros((nb if stats else 0, _STATS))
+    for b in prange(nb):
+        for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
+            xi0, xi1, xi2 = x[i, 0], x[i, 1], x[i, 2]
+            vi0, vi1, vi2 = v[i, 0], v[i, 1], v[i, 2]
+            ri = radius[i]
+            s0 = 0.0
+            s1 = 0.0
+            s2 = 0.0
+            q0 = 0.0
+            q1 = 0.0
+            q2 = 0.0
+            for k in range(istart[i], istart[i + 1]):
+                j = pj[k]
+                d0 = x[j, 0] - xi0
+                d1 = x[j, 1] - xi1
+                d2 = x[j, 2] - xi2
+                if p0:
+                    if d0 > hb0:
+                        d0 -= b0
+                    elif d0 < -hb0:
+                        d0 += b0
+                if p1:
+                    if d1 > hb1:
+                        d1 -= b1
+                    elif d1 < -hb1:
+                        d1 += b1
+                if p2:
+                    if d2 > hb2:
+                        d2 -= b2
+                    elif d2 < -hb2:
+                        d2 += b2
+                dist2 = d0 * d0 + d1 * d1 + d2 * d2
+                rj = radius[j]
+                rs = ri + rj
+                reach = rs + dcoh
+                if dist2 >= reach * reach:
+                    if friction:
+                        hist[k, 0] = 0.0
+                        hist[k, 1] = 0.0
+                        hist[k, 2] = 0.0
+                    fj[k, 0] = 0.0
+                    fj[k, 1] = 0.0
+                    fj[k, 2] = 0.0
+                    fj[k, 3] = 0.0
+                    fj[k, 4] = 0.0
+                    fj[k, 5] = 0.0
+                    continue
+                dist = np.sqrt(dist2)
+                inv = 1.0 / dist
+                n0 = d0 * inv
+                n1 = d1 * inv
+                n2 = d2 * inv
+                delta = rs - dist
+                vn = (vi0 - v[j, 0]) * n0 + (vi1 - v[j, 1]) * n1 + (vi2 - v[j, 2]) * n2
+                fn = 0.0
+                if delta > 0.0:
+                    if law == HOOKE:
+                        fn = kn * delta + gn * vn
+                    elif law == HERTZ:
+                        fn = kn * delta * np.sqrt(delta) + gn * vn
+                    else:
+                        fn = kn * delta / (rs * rs) + gn * vn
+                if fcoh != 0.0:
+                    fn += cohesion_force(fcoh, dcoh, delta)
+                F0 = -fn * n0
+                F1 = -fn * n1
+                F2 = -fn * n2
+                t0 = 0.0
+                t1 = 0.0
+                t2 = 0.0
+                u0 = 0.0
+                u1 = 0.0
+                u2 = 0.0
+                if friction:
+                    ar = ri - 0.5 * delta  # contact point c = ar n from x_i, e = c - d
+                    er = ar - dist
+                    c0 = ar * n0
+                    c1 = ar * n1
+                    c2 = ar * n2
+                    e0 = er * n0
+                    e1 = er * n1
+                    e2 = er * n2
+                    wi0, wi1, wi2 = omega[i, 0], omega[i, 1], omega[i, 2]
+                    wj0, wj1, wj2 = omega[j, 0], omega[j, 1], omega[j, 2]
+                    vr0 = vi0 + (wi1 * c2 - wi2 * c1) - v[j, 0] - (wj1 * e2 - wj2 * e1)
+                    vr1 = vi1 + (wi2 * c0 - wi0 * c2) - v[j, 1] - (wj2 * e0 - wj0 * e2)
+                    vr2 = vi2 + (wi0 * c1 - wi1 * c0) - v[j, 2] - (wj0 * e1 - wj1 * e0)
+                    vt = vr0 * n0 + vr1 * n1 + vr2 * n2
+                    if delta > 0.0:
+                        ft0, ft1, ft2, h0, h1, h2 = tangential_force(
+                            kt, gt, mu, fn, hist[k, 0], hist[k, 1], hist[k, 2], n0, n1, n2,
+                            vr0 - vt * n0, vr1 - vt * n1, vr2 - vt * n2, dt)
+                        hist[k, 0] = h0
+                        hist[k, 1] = h1
+                        hist[k, 2] = h2
+                        F0 += ft0
+                        F1 += ft1
+                        F2 += ft2
+                        t0 = c1 * ft2 - c2 * ft1
+                        t1 = c2 * ft0 - c0 * ft2
+                        t2 = c0 * ft1 - c1 * ft0
+                        u0 = -(e1 * ft2 - e2 * ft1)
+                        u1 = -(e2 * ft0 - e0 * ft2)
+                        u2 = -(e0 * ft1 - e1 * ft0)
+                    else:
+                        hist[k, 0] = 0.0
+                        hist[k, 1] = 0.0
+                        hist[k, 2] = 0.0
+                s0 += F0
+                s1 += F1
+                s2 += F2
+                q0 += t0
+                q1 += t1
+                q2 += t2
+                fj[k, 0] = -F0
+                fj[k, 1] = -F1
+                fj[k, 2] = -F2
+                fj[k, 3] = u0
+                fj[k, 4] = u1
+                fj[k, 5] = u2
+                if stats:
+                    if delta > 0.0:
+                        blk[b, 0] += elastic_energy(law, kn, delta, rs)
                     blk[b, 1] += 1.0
                     blk[b, 2] += d0 * F0
                     blk[b, 3] += d0 * F1

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pysim.contacts import FJ_COLUMNS, pair_pass, reduce_pass
+from pysim.contacts import FJ_COLUMNS, pair_pass, reduce_pass, sphere_pass
 from pysim.jit import njit, pnjit, prange
 from pysim.neighbors import build_list, list_is_stale, transfer_rows
 from pysim.rotation import axis_from, axis_of, free_rotate, rotate_top
@@ -143,8 +143,12 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pj, istart, jstart
     ``-gamma_bg v`` and ``-gamma_rot omega`` (added in that order). With ``stats`` also
     the virial and returns ``(elastic energy, pair contacts, wall contacts)``; without,
     the virial is left as it was and the first two are zero."""
-    pe, nc = pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law,
-                       cp, friction, dt, sys[RODS] != 0.0, f, torque, fj, stats, virial)
+    if sys[RODS] != 0.0:
+        pe, nc = pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law,
+                           cp, friction, dt, True, f, torque, fj, stats, virial)
+    else:
+        pe, nc = sphere_pass(x, v, omega, radius, box, periodic, pj, istart, hist, law, cp,
+                             friction, dt, f, torque, fj, stats, virial)
     gx, gy, gz = sys[GX], sys[GY], sys[GZ]
     gb = sys[GAMMA_BG]
     gr = sys[GAMMA_ROT]

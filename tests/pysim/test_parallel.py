@@ -173,3 +173,43 @@ def test_short_trajectory_against_numpy_velocity_verlet():
     assert touching > 100
     np.testing.assert_allclose(st.x, xr, rtol=0, atol=1e-11)
     np.testing.assert_allclose(st.v, vr, rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("friction", [False, True])
+def test_sphere_pass_equals_the_general_pass(rng, friction):
+    """The spheres-only loop gives the general loop's forces, torques, reactions and
+    springs (to rounding: it drops the exactly-zero torque of the normal force)."""
+    from pysim.contacts import pair_pass, sphere_pass
+    from pysim.forces import HOOKE, contact_params
+    from pysim.neighbors import build_list
+
+    n = 300
+    box = np.full(3, 7.0)
+    x = rng.uniform(0, 7.0, (n, 3))
+    r = rng.uniform(0.35, 0.55, n)
+    v = rng.normal(0, 1, (n, 3))
+    w = rng.normal(0, 1, (n, 3))
+    u = np.tile([0.0, 0.0, 1.0], (n, 1))
+    half = np.zeros(n)
+    per = np.ones(3, bool)
+    pi, pj, istart, jstart, jk = build_list(x, u, r, half, box, per, 0.3)
+    p = contact_params(1e4, 5.0, k_t=5e3, gamma_t=1.0, mu=0.5 if friction else 0.0)
+    out = []
+    for kernel in ("general", "spheres"):
+        hist = np.tile([1e-4, -2e-4, 3e-4], (len(pj), 1)) if friction else np.zeros((len(pj), 0))
+        f = np.zeros((n, 3))
+        tq = np.zeros((n, 3))
+        fj = np.zeros((len(pj), 6))
+        vir = np.zeros((3, 3))
+        if kernel == "general":
+            pe, nc = pair_pass(x, v, w, u, r, half, box, per, pj, istart, hist, HOOKE, p,
+                               friction, 1e-4, False, f, tq, fj, True, vir)
+        else:
+            pe, nc = sphere_pass(x, v, w, r, box, per, pj, istart, hist, HOOKE, p, friction,
+                                 1e-4, f, tq, fj, True, vir)
+        out.append((f, tq, fj, vir, hist, pe, nc))
+    (a, b) = out
+    assert a[6] == b[6] > 100
+    for k in range(5):
+        np.testing.assert_allclose(a[k], b[k], rtol=1e-12, atol=1e-12)
+    assert a[5] == pytest.approx(b[5], rel=1e-14)
