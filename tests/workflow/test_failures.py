@@ -49,8 +49,10 @@ def test_broken_deck_is_reported_and_the_rest_runs(tmp_path):
     inputs = tmp_path / "inputs"
     shutil.copytree(ROOT / "inputs", inputs)
     deck = inputs / "lammps" / "in.spheres.compress"
-    deck.write_text(deck.read_text().replace("read_data       ${data}",
-                                             "read_data       ${data}\nthis_is_not_a_command 1"))
+    text = deck.read_text()
+    assert "atom_style      sphere\n" in text
+    deck.write_text(text.replace("atom_style      sphere\n",
+                                 "atom_style      sphere\nthis_is_not_a_command 1\n"))
     cfg = tmp_path / "cfg.yaml"
     cfg.write_text(yaml.safe_dump(config(tmp_path / "results", engines=["lammps", "liggghts"]
                                          if "liggghts" in ENGINES else ["lammps"],
@@ -74,19 +76,26 @@ def test_broken_deck_is_reported_and_the_rest_runs(tmp_path):
 
 @pytest.mark.engines
 def test_unstable_case_is_a_reported_blow_up(tmp_path):
+    """Soft contacts squeezed fast: pysim stops with its blow-up message (step and
+    particles), LAMMPS loses atoms or warns of dangerous builds; both are reported, the
+    stable variant's runs are not affected."""
     cfg = tmp_path / "cfg.yaml"
     variants = {"ok": {}, "unstable": {"contact": {"k_n": 100.0},
                                        "protocol": {"dt": 1e-3, "rate": 0.5, "rate_fast": 1.0}}}
-    cfg.write_text(yaml.safe_dump(config(tmp_path / "results", engines=["lammps"],
+    cfg.write_text(yaml.safe_dump(config(tmp_path / "results", engines=["pysim", "lammps"],
                                          variants=variants)))
     r = subprocess.run(snakemake(cfg), capture_output=True, text=True)
     assert r.returncode == 0, r.stderr[-3000:]
-    fail = pd.read_csv(tmp_path / "results" / "failures.csv")
-    assert list(fail.case) == ["unstable"]
-    assert fail.error.iloc[0].startswith("lammps failed") or "blew up" in fail.error.iloc[0] \
-        or "dangerous" in fail.error.iloc[0]
+    fail = pd.read_csv(tmp_path / "results" / "failures.csv").set_index("engine")
+    assert set(fail.case) == {"unstable"} and set(fail.index) == {"pysim", "lammps"}
+    assert fail.loc["pysim", "error"].startswith("pysim failed (exit 3): velocity Verlet: overlap")
+    assert "between particles (0-based)" in fail.loc["pysim", "error"]
+    assert "at step" in fail.loc["pysim", "error"]
+    assert "checkpoint" in fail.loc["pysim", "error"]
+    lam = fail.loc["lammps", "error"]
+    assert lam.startswith("lammps failed") or "dangerous" in lam or "blew up" in lam
     summary = pd.read_csv(tmp_path / "results" / "summary.csv")
-    assert set(summary.case) == {"ok"}
+    assert set(summary.case) == {"ok"} and set(summary.engine) == {"pysim", "lammps"}
 
 
 @pytest.mark.engines
