@@ -115,7 +115,10 @@ class Frame:
     def minimum_image(self, d: np.ndarray) -> np.ndarray:
         """Separation vectors ``d`` (..., 3) folded to the minimum image on periodic axes."""
         d = np.asarray(d, dtype=np.float64)
-        return d - self.box * np.floor(d / self.box + 0.5) * self.periodic
+        # only periodic axes have a (non-zero) period: a 2-D frame's z edge may be 0
+        safe = np.where(self.periodic & (self.box > 0), self.box, 1.0)
+        shift = np.where(self.periodic & (self.box > 0), safe * np.floor(d / safe + 0.5), 0.0)
+        return d - shift
 
     def ends(self) -> tuple[np.ndarray, np.ndarray]:
         """Spine ends ``x -/+ (L/2) u`` (N, 3) each (both equal the centre for spheres)."""

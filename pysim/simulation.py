@@ -365,6 +365,20 @@ class Simulation:
         self._rebuild()
         self.compute_forces()
 
+    def rescale_box(self, factor: float):
+        """Scale the periodic box edges by ``factor`` with the centres moved affinely
+        (orientations and sizes kept), then recompute forces: the packing fraction
+        changes by ``factor^-d``."""
+        if not factor > 0:
+            raise ValueError(f"scale factor must be > 0, got {factor}")
+        s = self.state
+        axes = np.flatnonzero(s.periodic)
+        s.box[axes] *= factor
+        s.x[:, axes] *= factor
+        itg.wrap(s.x, s.box, s.periodic)
+        self._rebuild()
+        self.compute_forces()
+
     def stress(self) -> np.ndarray:
         """Contact stress ``sigma_ab = (1/V) sum_c l^c_a F^c_b`` (tension positive) of the
         last force evaluation (pair contacts; walls excluded)."""

@@ -241,7 +241,7 @@ def _check_case(case: dict, source: str, at: str):
         raise ConfigError(
             f"{source}: {at}protocol.phi_init = {pr['phi_init']} cannot be reached by random "
             f"insertion in {dim}-D; use a value <= {phi_insert} and compress")
-    phi_end = pr["phi_final"] if pr["name"] == "compress" else 0.75
+    phi_end = {"compress": pr.get("phi_final"), "jammed": pr.get("phi_max")}.get(pr["name"], 0.75)
     if pr["name"] == "compress":
         if pr["phi_final"] <= pr["phi_init"]:
             raise ConfigError(f"{source}: {at}protocol.phi_final = {pr['phi_final']} must be "

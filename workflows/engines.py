@@ -49,6 +49,8 @@ def supports(engine: str, case: dict) -> str | None:
     name = case["protocol"]["name"]
     if name != "compress":
         return f"{engine} runs only the 'compress' protocol here, not '{name}'"
+    if case["protocol"].get("integrator", "verlet") != "verlet":
+        return f"{engine} integrates inertial dynamics only (no overdamped integrator)"
     if k == "2d":
         return f"{engine} has no 2-D deck yet"
     if k == "rods" and engine == "liggghts":
@@ -467,7 +469,7 @@ def _geometry(frame, ids_i, ids_j):
     a = np.array([index[int(t)] for t in ids_i], dtype=np.int64)
     b = np.array([index[int(t)] for t in ids_j], dtype=np.int64)
     d = frame.x[b] - frame.x[a]
-    d -= frame.box * np.floor(d / frame.box + 0.5) * frame.periodic
+    d = frame.minimum_image(d)
     r = np.linalg.norm(d, axis=1)
     n = d / np.where(r > 0, r, 1.0)[:, None]
     delta = frame.radius[a] + frame.radius[b] - r

@@ -5,7 +5,9 @@ Stages: an optional fast compression ``phi_init -> phi_fast`` at true strain rat
 pressure reaches ``pressure_final``). A stage from ``phi_a`` to ``phi_b`` lasts
 ``round(ln(phi_b/phi_a) / (3 rate dt))`` steps, the same count as the decks.
 Thermo rows are written at multiples of ``thermo_every`` steps, dump frames at
-multiples of ``dump_every``, as LAMMPS does.
+multiples of ``dump_every``, as LAMMPS does. ``integrator: overdamped`` replaces velocity
+Verlet by the overdamped Heun steps against the contracting substrate (science.md, 2-D
+compression; ``kappa`` = ``rate``).
 
 Long runs checkpoint every ``checkpoint_every`` seconds of wall time
 (``checkpoint.npz`` next to the outputs, which grow as ``*.part`` files until the run
@@ -101,6 +103,8 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     p_final = case["protocol"].get("pressure_final", math.inf)
     stages = stage_plan(case["protocol"], s.dimension)
     ends = np.cumsum([n for _, n, _ in stages])
+    overdamped = case["protocol"].get("integrator", "verlet") == "overdamped"
+    k_d = case["protocol"].get("k_d", 1.0)
 
     t0 = time.perf_counter()
     last_ckpt = t0
@@ -116,7 +120,10 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
                 nxt = min(int(end), (s.step // thermo_every + 1) * thermo_every,
                           (s.step // dump_every + 1) * dump_every)
                 before = s.step
-                sim.run(nxt - s.step, strain_rate=rate)
+                if overdamped:
+                    sim.run_overdamped(nxt - s.step, k_d=k_d, kappa=-rate)
+                else:
+                    sim.run(nxt - s.step, strain_rate=rate)
                 bar.update(s.step - before)
                 th = sim.thermo()
                 if s.step % thermo_every == 0:

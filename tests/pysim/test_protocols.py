@@ -78,3 +78,25 @@ def test_two_dimensional_compress(tmp_path):
     f, c = RunData(out).frames()[-1]
     assert np.all(f.x[:, 2] == 0) and np.all(f.axis[:, 2] == 0)
     assert c.n > 150
+
+
+def test_jammed_disks_by_box_bisection(tmp_path):
+    """Bidisperse disks: overdamped compression, then FIRE with box bisection to
+    U/L^2 = 1e-15 (within a factor 2); a jammed, force-balanced, isostatic packing."""
+    import json
+
+    from analysis.contacts import ContactNumber
+
+    out = run_case(tmp_path, {
+        "particles": {"n": 64, "dimension": 2,
+                      "diameter": {"distribution": "bidisperse", "mean": 1.0, "ratio": 1.4}},
+        "contact": {"law": "harmonic", "k_n": 1.0},
+        "protocol": {"name": "jammed", "phi_init": 0.4, "rate": 2e-3, "dt": 0.01},
+        "output": {"thermo_every": 500, "dump_every": 100000}, "seed": 5})
+    res = json.loads((out / "jammed.json").read_text())
+    assert res["converged"] and 5e-16 <= res["energy_density"] <= 2e-15
+    assert 0.80 < res["phi_j"] < 0.87
+    assert res["force_residual_max"] < 1e-3  # disks: true force balance
+    f, c = RunData(out).frames()[-1]
+    cn = ContactNumber().compute(f, c)
+    assert 3.6 < cn.z_rattler_free < 4.4  # isostatic 2 d = 4, up to finite-size terms

@@ -1,0 +1,161 @@
+"""Mechanically stable packings at jamming (science.md, 2-D compression protocol).
+
+1. **Compress** overdamped (Heun, substrate drag ``k_d``) at rate ``kappa`` from the
+   random zero-energy start. Once the contact pressure exceeds ``pressure_start`` (in
+   units of ``k_n / D^(d-1)``), the packing is relaxed (FIRE, on a copy) every
+   ``thermo_every`` steps; the compression stops at the first packing whose relaxed
+   elastic energy per area ``U/L^d`` exceeds ``energy_target`` (jammed).
+2. **Bisect the box size**: between the last unjammed packing fraction (relaxed energy
+   below the target) and the first jammed one, rescale the box affinely from the current
+   packing, relax with FIRE, and move the bracket, until ``U/L^d`` lies within a factor 2
+   of ``energy_target`` (or ``max_bisections`` is reached, reported as not converged).
+
+The final packing is the mechanically stable state: its frame is the last of
+``particles.dump``/``contacts.dump`` and ``jammed.json`` records ``phi_j``, ``U/L^d``, the
+number of bisections, and the residual forces and torques relative to the mean contact
+force and torque (the spine-distance law has a kink for parallel side-by-side rods, so
+those residuals are not zero for rods). Energies are in units of ``k_n`` and lengths in
+units of the smallest diameter.
+"""
+from __future__ import annotations
+
+import json
+import time
+
+import numpy as np
+from tqdm import tqdm
+
+from pysim import io
+from pysim.protocols.compress import model_from_case, state_from_init
+from pysim.protocols.output import RunFiles
+from pysim.simulation import BlowUpError, Simulation
+
+
+def _energy_density(sim: Simulation, d_min: float) -> float:
+    """Elastic energy per box area (volume in 3-D), lengths in units of ``d_min``."""
+    s = sim.state
+    return sim.thermo().pe / (s.volume() / d_min**s.dimension)
+
+
+def residuals(sim: Simulation) -> dict:
+    """Residual forces and torques of the packing relative to its mean contact force and
+    mean contact torque ``|F_c| R`` (rattlers included; units cancel)."""
+    ij, rec = sim.contact_table()
+    f = np.linalg.norm(sim.f, axis=1)
+    t = np.linalg.norm(sim.torque, axis=1)
+    if len(rec) == 0:
+        return {"mean_contact_force": 0.0, "force_residual_mean": float("nan"),
+                "force_residual_max": float("nan"), "torque_residual_mean": float("nan"),
+                "torque_residual_max": float("nan")}
+    fc = np.linalg.norm(rec[:, 7:10], axis=1)
+    lever = sim.state.radius[ij[:, 0]]
+    mean_f = float(fc.mean())
+    mean_t = float((fc * lever).mean())
+    return {"mean_contact_force": mean_f, "force_residual_mean": float(f.mean() / mean_f),
+            "force_residual_max": float(f.max() / mean_f),
+            "torque_residual_mean": float(t.mean() / mean_t),
+            "torque_residual_max": float(t.max() / mean_t)}
+
+
+def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = False,
+        checkpoint_every: float = 300.0) -> dict:
+    """Run the protocol; returns a summary (``phi_j``, ``energy_density``, residuals)."""
+    p = case["protocol"]
+    files = RunFiles(out_dir, init["ids"])
+    if resume:
+        sim, drv = files.resume()
+    else:
+        state = state_from_init(case, init)
+        sim = Simulation(state, model_from_case(case), dt=p["dt"],
+                         skin=0.2 * 2.0 * float(np.max(state.radius)), check_dt=False)
+        files.start()
+        drv = {"phase": "compress", "lo": None, "hi": None, "bisections": 0}
+    s = sim.state
+    k_n = case["contact"]["k_n"]
+    d_min = float(2 * s.radius.min()) if not resume else drv["d_min"]
+    drv["d_min"] = d_min
+    target = p["energy_target"]
+    f_tol = p["force_tol"] * k_n / d_min
+    every = int(case.get("output", {}).get("thermo_every", 1000))
+    t0 = time.perf_counter()
+    bar = tqdm(disable=not progress, unit="relax", desc="pysim jammed", dynamic_ncols=True)
+
+    def relaxed_energy(trial: Simulation) -> float:
+        trial.minimize(f_tol=f_tol, max_iter=p["max_relax"])
+        return _energy_density(trial, d_min)
+
+    def record(sim_):
+        files.thermo(sim_.thermo().row())
+        files.dump(sim_)
+
+    try:
+        if not resume:
+            files.dump(sim)
+        while drv["phase"] == "compress":
+            sim.run_overdamped(every, k_d=p["k_d"], kappa=p["rate"])
+            th = sim.thermo()
+            files.thermo(th.row())
+            phi = s.packing_fraction()
+            if phi > p["phi_max"]:
+                raise BlowUpError(f"no jamming below phi_max = {p['phi_max']} (phi = {phi:.4f}); "
+                                  "raise phi_max or check the case")
+            if th.pressure * d_min ** (s.dimension - 1) / k_n < p["pressure_start"]:
+                continue
+            # relax a copy: the compression itself goes on from the unrelaxed packing
+            trial = _copy(sim)
+            e = relaxed_energy(trial)
+            bar.update(1)
+            bar.set_postfix(phi=f"{phi:.4f}", U=f"{e:.2e}", refresh=False)
+            if e > target:
+                drv.update(phase="bisect", hi=phi)
+                sim = trial
+                s = sim.state
+                record(sim)
+            else:
+                drv["lo"] = phi
+            files.checkpoint(sim, drv)
+        while drv["phase"] == "bisect":
+            e = _energy_density(sim, d_min)
+            if target / 2 <= e <= 2 * target or drv["bisections"] >= p["max_bisections"]:
+                drv["phase"] = "done"
+                break
+            phi = s.packing_fraction()
+            if e > 2 * target:
+                drv["hi"] = phi
+            else:
+                drv["lo"] = phi
+            lo = drv["lo"] if drv["lo"] is not None else 0.9 * drv["hi"]
+            goal = 0.5 * (lo + drv["hi"])
+            sim.rescale_box((phi / goal) ** (1.0 / s.dimension))
+            e = relaxed_energy(sim)
+            drv["bisections"] += 1
+            bar.update(1)
+            bar.set_postfix(phi=f"{goal:.6f}", U=f"{e:.2e}", refresh=False)
+            record(sim)
+            files.checkpoint(sim, drv)
+    except BlowUpError as exc:
+        raise BlowUpError(f"{exc}; the last good checkpoint is {files.ckpt}") from None
+    finally:
+        bar.close()
+        files.close()
+    e = _energy_density(sim, d_min)
+    result = {"phi_j": s.packing_fraction(), "energy_density": e,
+              "converged": bool(target / 2 <= e <= 2 * target),
+              "bisections": drv["bisections"], **residuals(sim)}
+    io.atomic_write_text(files.dir / "jammed.json", json.dumps(result, indent=2) + "\n")
+    files.finalize()
+    return {"steps": s.step, "wall_seconds": time.perf_counter() - t0, **result,
+            "resumed": bool(resume)}
+
+
+def _copy(sim: Simulation) -> Simulation:
+    """An independent copy of a simulation (through the checkpoint format in memory)."""
+    import tempfile
+    from pathlib import Path
+
+    from pysim import checkpoint
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "copy.npz"
+        checkpoint.save(sim, path)
+        return checkpoint.load(path)[0]
