@@ -41,7 +41,7 @@ def pressure_vs_phi(runs, out, p_scale=1.0, window=None, phi_min=None):
         label = f"{r['engine']} seed {r['seed']}"
         ax.plot(th.phi, th.pressure / p_scale, lw=1.2, label=label, **st)
         axl.semilogy(th.phi, np.clip(th.pressure / p_scale, 1e-9, None), lw=1.0, **st)
-        if np.isfinite(r.get("phi_j", np.nan)):
+        if np.isfinite(r.get("phi_j", np.nan)) and np.isfinite(r.get("slope", np.nan)):
             x = np.linspace(r["phi_j"], th.phi.max(), 20)
             ax.plot(x, r["slope"] * (x - r["phi_j"]) / p_scale, color=st["color"], lw=0.6,
                     alpha=0.7)
@@ -113,4 +113,29 @@ def message_figure(out, message: str):
     fig, ax = plt.subplots(figsize=(6, 2))
     ax.axis("off")
     ax.text(0.5, 0.5, message, ha="center", va="center", wrap=True)
+    _save(fig, out)
+
+
+def trends(summary, parameter, observables, out, title=None, references=None):
+    """Observables versus a case parameter (e.g. ``alpha``), one panel each, engines
+    overlaid: mean and standard deviation over seeds. ``references`` maps an observable
+    to ``[(label, x (array), y (array))]`` curves drawn in black (theory)."""
+    obs = [o for o in observables if o in set(summary.observable)]
+    if not obs or parameter not in summary.columns:
+        message_figure(out, f"no {', '.join(observables)} versus {parameter} to draw")
+        return
+    fig, axes = plt.subplots(1, len(obs), figsize=(4.2 * len(obs), 3.6), squeeze=False)
+    for ax, o in zip(axes[0], obs):
+        s = summary[summary.observable == o]
+        for engine, g in s.groupby("engine"):
+            st = g.groupby(parameter)["value"].agg(["mean", "std"]).reset_index()
+            ax.errorbar(st[parameter], st["mean"], yerr=st["std"].fillna(0), fmt="o-",
+                        capsize=3, color=ENGINE_COLORS.get(engine, "k"), label=engine, ms=4)
+        for label, x, y in (references or {}).get(o, []):
+            ax.plot(x, y, "k--", lw=0.8, label=label)
+        ax.set_xlabel(parameter)
+        ax.set_ylabel(o)
+        ax.legend(fontsize=7)
+    if title:
+        fig.suptitle(title, fontsize=10)
     _save(fig, out)

@@ -124,3 +124,42 @@ def tidy(rows, study, case, engine, seed, parameters: dict | None = None) -> pd.
     for k, v in (parameters or {}).items():
         df[k] = v
     return df
+
+
+def analyse_jammed(run_dir, c_min: int | None = None):
+    """Observables of a mechanically stable packing (pysim's ``jammed`` protocol).
+
+    ``phi_j`` and the residuals come from ``jammed.json``; ``z_j`` (rattler-free, each
+    contact once: ``z_tilde``), ``z_j_bonds`` (2-D parallel side contacts counted twice),
+    the fractions of tip-tip, tip-side and side-side contacts, and the orientational
+    order ``s2``, ``s4`` (2-D) or ``s_nematic`` (3-D) of the final frame.
+    """
+    import json
+
+    from analysis.contacts import TYPE_NAMES, ContactTypes
+    from analysis.order import OrientationOrder2D
+
+    run = RunData(run_dir)
+    res = json.loads((Path(run_dir) / "jammed.json").read_text())
+    frame, contacts = run.frames()[-1]
+    cn = ContactNumber(c_min).compute(frame, contacts)
+    rows = [("phi_j", res["phi_j"], np.nan), ("energy_density", res["energy_density"], np.nan),
+            ("z_j", cn.z_rattler_free, np.nan), ("z_j_bonds", cn.z_bonds, np.nan),
+            ("z_j_with_rattlers", cn.z, np.nan),
+            ("rattler_fraction_j", cn.n_rattlers / frame.n, np.nan),
+            ("force_residual", res["force_residual_mean"], np.nan),
+            ("torque_residual", res["torque_residual_mean"], np.nan),
+            ("bisections", float(res["bisections"]), np.nan),
+            ("converged", float(res["converged"]), np.nan)]
+    if np.any(frame.length > 0):
+        types = ContactTypes().compute(frame, contacts)
+        rows += [(f"fraction_{k.replace('-', '_')}", float(v), np.nan)
+                 for k, v in zip(TYPE_NAMES, types.fractions)]
+        if frame.dim == 2:
+            order = OrientationOrder2D().compute(frame)
+            rows += [("s2", order.S2, np.nan), ("s4", order.S4, np.nan),
+                     ("sqrt_n_s2", order.sqrtN_S2, np.nan), ("sqrt_n_s4", order.sqrtN_S4, np.nan)]
+        else:
+            rows.append(("s_nematic", NematicOrder().compute(frame).S, np.nan))
+    curves = frame_curves(run, c_min)
+    return rows, curves, run.thermo

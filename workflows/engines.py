@@ -97,6 +97,11 @@ def deck_vars(case: dict, engine: str) -> dict[str, str]:
         p = case["particles"]
         d = p["diameter"]["mean"]
         v["spheres"] = glued_spheres(p["aspect_ratio"] * d, d, p.get("glued_spacing", 0.25))
+        # fix rigid/small needs ghost atoms as far as a body reaches from its owner atom
+        from workflows.case import size_extremes
+
+        dmax = size_extremes(p["diameter"])[2]
+        v["ghost_cut"] = (p["aspect_ratio"] + 1.0) * dmax + 0.2 * dmax
         for key in ("mu", "k_t"):
             v.pop(key)
     elif engine == "lammps":

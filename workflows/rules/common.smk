@@ -48,7 +48,10 @@ def study_variants():
 
 
 def get_final_output():
-    out = [f"{RESULTS}/summary.csv", f"{RESULTS}/comparison.csv"]
+    out = [f"{RESULTS}/summary.csv", f"{RESULTS}/comparison.csv", f"{RESULTS}/failures.csv"]
+    for study in sorted({s for s, _ in study_variants()}):
+        if varying_parameters(CFG, study):
+            out.append(f"{RESULTS}/{study}/figures/trends.png")
     for study, variant in study_variants():
         out += expand(
             f"{RESULTS}/{study}/figures/{variant}.{{kind}}.png",

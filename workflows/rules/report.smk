@@ -48,3 +48,27 @@ rule plot_study:
         "{PYTHON} -m workflows.scripts.plot_study --pressure {output.pressure}"
         " --contacts {output.contacts} --phi-j {output.phi_j} --p-scale {params.p_scale}"
         " --window {params.window} {params.dirs} 2> {log}"
+
+
+def _trend_parameter(study):
+    params = varying_parameters(CFG, study)
+    return "alpha" if "alpha" in params else (sorted(params)[0] if params else None)
+
+
+rule plot_trends:
+    input:
+        f"{RESULTS}/summary.csv",
+    output:
+        report(
+            f"{RESULTS}/{{study}}/figures/trends.png",
+            caption="../report/trends.rst",
+            category="{study}",
+        ),
+    log:
+        f"{RESULTS}/{{study}}/figures/trends.log",
+    params:
+        parameter=lambda wc: _trend_parameter(wc.study),
+        dimension=lambda wc: CFG["studies"][wc.study]["case"]["particles"].get("dimension", 3),
+    shell:
+        "{PYTHON} -m workflows.scripts.plot_trends --summary {input} --study {wildcards.study}"
+        " --parameter {params.parameter} --dimension {params.dimension} --out {output} 2> {log}"

@@ -6,7 +6,8 @@ import json
 import sys
 from pathlib import Path
 
-from analysis.summary import TIDY_COLUMNS, analyse_compression, analyse_growth, tidy
+from analysis.summary import (TIDY_COLUMNS, analyse_compression, analyse_growth,
+                              analyse_jammed, tidy)
 from pysim.io import atomic_write_text
 from workflows.case import ConfigError, load_case
 
@@ -43,6 +44,8 @@ def main(argv=None) -> int:
     p_scale = case["contact"]["k_n"] / case["particles"]["diameter"]["mean"]
     if case["protocol"]["name"] == "growth":
         rows, curves, _thermo = analyse_growth(a.run)
+    elif case["protocol"]["name"] == "jammed":
+        rows, curves, _thermo = analyse_jammed(a.run)
     else:
         rows, curves, _thermo = analyse_compression(a.run, a.window, p_scale)
     df = tidy(rows, a.study, a.variant, a.engine, a.seed, json.loads(a.parameters))

@@ -37,8 +37,9 @@ def main(argv=None) -> int:
         seeds.setdefault(engine, [])
         seeds[engine].append(seed)
         runs.append({"engine": engine, "seed": seed, "thermo": read_thermo(d / "thermo.dat"),
-                     "curves": pd.read_csv(d / "curves.csv"), "phi_j": val.get("phi_j"),
-                     "slope": val.get("jamming_slope")})
+                     "curves": pd.read_csv(d / "curves.csv"),
+                     "phi_j": val.get("phi_j", float("nan")),
+                     "slope": val.get("jamming_slope", float("nan"))})
     for r in runs:
         r["seed_index"] = sorted(seeds[r["engine"]]).index(r["seed"])
     if not runs:
