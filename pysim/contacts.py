@@ -127,6 +127,20 @@ def pair_force(g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, ri, rj, vi0, vi1, vi2,
             n2, delta, x0, x1, x2)
 
 
+@njit
+def block_totals(blk, virial):
+    """Sum the per-block partial sums in block order (thread-independent): returns
+    ``(elastic energy, contacts)`` and writes the virial."""
+    tot = np.zeros(_STATS)
+    for b in range(blk.shape[0]):
+        for c in range(_STATS):
+            tot[c] += blk[b, c]
+    for a in range(3):
+        for c in range(3):
+            virial[a, c] = tot[2 + 3 * a + c]
+    return tot[0], int(tot[1])
+
+
 @pnjit
 def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law, p,
               friction, dt, rods, f, torque, fj, stats, virial):
@@ -224,19 +238,9 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
             torque[i, 0] = q0
             torque[i, 1] = q1
             torque[i, 2] = q2
-    pe = 0.0
-    nc = 0
     if stats:
-        tot = np.zeros(_STATS)
-        for b in range(nb):
-            for c in range(_STATS):
-                tot[c] += blk[b, c]
-        pe = tot[0]
-        nc = int(tot[1])
-        for a in range(3):
-            for c in range(3):
-                virial[a, c] = tot[2 + 3 * a + c]
-    return pe, nc
+        return block_totals(blk, virial)
+    return 0.0, 0
 
 
 @pnjit
@@ -395,19 +399,9 @@ def sphere_pass(x, v, omega, radius, box, periodic, pj, istart, hist, law, p, fr
             torque[i, 0] = q0
             torque[i, 1] = q1
             torque[i, 2] = q2
-    pe = 0.0
-    nc = 0
     if stats:
-        tot = np.zeros(_STATS)
-        for b in range(nb):
-            for c in range(_STATS):
-                tot[c] += blk[b, c]
-        pe = tot[0]
-        nc = int(tot[1])
-        for a in range(3):
-            for c in range(3):
-                virial[a, c] = tot[2 + 3 * a + c]
-    return pe, nc
+        return block_totals(blk, virial)
+    return 0.0, 0
 
 
 @pnjit

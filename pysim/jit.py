@@ -47,9 +47,11 @@ def _use_versioned_cache() -> None:
     base = Path(__file__).resolve().parent / "__pycache__"
     current = base / f"numba-{_source_hash()}"
     numba.config.CACHE_DIR = str(current)
-    try:  # drop caches of earlier sources
+    try:  # drop caches of earlier sources, once no process can still be using them
+        import time
+
         for old in base.glob("numba-*"):
-            if old != current:
+            if old != current and time.time() - old.stat().st_mtime > 86400:
                 shutil.rmtree(old, ignore_errors=True)
     except OSError:
         pass
