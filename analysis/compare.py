@@ -4,7 +4,9 @@ For every ``(study, case, observable)``: the mean, standard deviation and number
 seeds per engine, and for every engine the difference of its mean from the
 other engines' with a verdict: ``agree`` when ``|difference| <= tolerance``,
 ``DIFFER`` otherwise, ``n/a`` when either side is missing. Tolerances are absolute,
-per observable (:data:`TOLERANCES`); observables without one get no verdict.
+per observable (:data:`TOLERANCES`); observables without one get no verdict. A second
+verdict compares the difference with two standard errors of the difference of the seed
+means (``uncertainty``; needs two seeds or more on both sides).
 """
 from __future__ import annotations
 
@@ -43,15 +45,22 @@ def compare(summary: pd.DataFrame, tolerances: dict | None = None) -> pd.DataFra
         for a in range(len(recs)):
             for b in range(a + 1, len(recs)):
                 ra, rb = recs[a], recs[b]
+                # two standard errors of the difference, from the seed-to-seed spread
+                unc = 2.0 * np.sqrt(ra["std"] ** 2 / ra["n"] + rb["std"] ** 2 / rb["n"]) \
+                    if ra["n"] >= 2 and rb["n"] >= 2 else np.nan
                 if np.isfinite(ra["mean"]) and np.isfinite(rb["mean"]):
                     diff = float(rb["mean"] - ra["mean"])
                     verdict = "agree" if abs(diff) <= tol[obs] else "DIFFER"
+                    v_unc = ("n/a" if not np.isfinite(unc)
+                             else "agree" if abs(diff) <= unc else "DIFFER")
                 else:
-                    diff, verdict = np.nan, "n/a"
+                    diff, verdict, v_unc = np.nan, "n/a", "n/a"
                 rows.append({"study": study, "case": case, "observable": obs,
                              "engine_a": ra.engine, "mean_a": ra["mean"], "std_a": ra["std"],
                              "engine_b": rb.engine, "mean_b": rb["mean"], "std_b": rb["std"],
-                             "difference": diff, "tolerance": tol[obs], "verdict": verdict})
+                             "difference": diff, "tolerance": tol[obs], "verdict": verdict,
+                             "uncertainty": unc, "verdict_uncertainty": v_unc})
     return pd.DataFrame(rows, columns=["study", "case", "observable", "engine_a", "mean_a",
                                        "std_a", "engine_b", "mean_b", "std_b", "difference",
-                                       "tolerance", "verdict"])
+                                       "tolerance", "verdict", "uncertainty",
+                                       "verdict_uncertainty"])
