@@ -72,3 +72,24 @@ rule plot_trends:
     shell:
         "{PYTHON} -m workflows.scripts.plot_trends --summary {input} --study {wildcards.study}"
         " --parameter {params.parameter} --dimension {params.dimension} --out {output} 2> {log}"
+
+
+rule body_check:
+    output:
+        table=report(
+            f"{RESULTS}/body_check/body_check.csv",
+            caption="../report/body_check.rst",
+            category="LAMMPS body rods",
+        ),
+        figure=report(
+            f"{RESULTS}/body_check/body_check.png",
+            caption="../report/body_check.rst",
+            category="LAMMPS body rods",
+        ),
+    log:
+        f"{RESULTS}/body_check/body_check.log",
+    params:
+        work=f"{RESULTS}/body_check/work",
+    shell:
+        "{PYTHON} -m workflows.scripts.body_check --alpha 2 --work {params.work}"
+        " --table {output.table} --figure {output.figure} 2> {log}"
