@@ -131,8 +131,11 @@ def trends(summary, parameter, observables, out, title=None, references=None):
             st = g.groupby(parameter)["value"].agg(["mean", "std"]).reset_index()
             ax.errorbar(st[parameter], st["mean"], yerr=st["std"].fillna(0), fmt="o-",
                         capsize=3, color=ENGINE_COLORS.get(engine, "k"), label=engine, ms=4)
+        lo, hi = s[parameter].min(), s[parameter].max()
         for label, x, y in (references or {}).get(o, []):
-            ax.plot(x, y, "k--", lw=0.8, label=label)
+            keep = (np.asarray(x) >= lo) & (np.asarray(x) <= hi)  # theory only where data are
+            if keep.any():
+                ax.plot(np.asarray(x)[keep], np.asarray(y)[keep], "k--", lw=0.8, label=label)
         ax.set_xlabel(parameter)
         ax.set_ylabel(o)
         ax.legend(fontsize=7)

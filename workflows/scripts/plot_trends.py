@@ -26,7 +26,7 @@ def references(parameter: str, dimension: int) -> dict:
         z2 = np.where(a > 0, theory.isostatic_z(2, True), theory.isostatic_z(2, False))
         return {"z_j_bonds": [("isostatic 2 d_f", a, z2)]}
     z_iso = np.where(a > 0, theory.isostatic_z(3, True), theory.isostatic_z(3, False))
-    thick = a >= 1
+    thick = a >= 3  # the random contact equation holds for slender rods
     phi_rce = np.array([theory.rce_packing_fraction(10.0, ai) for ai in a[thick]])
     return {"z_j": [("isostatic 2 d_f", a, z_iso)],
             "phi_j": [("random contact eq., <C> = 10", a[thick], phi_rce)]}
