@@ -29,7 +29,8 @@ TIDY_COLUMNS = ["study", "case", "engine", "seed", "observable", "value", "uncer
 def frame_curves(run: RunData, c_min: int | None = None) -> pd.DataFrame:
     """Per output frame: ``phi``, contact ``pressure`` (from the contact table), ``z``,
     ``z_rattler_free``, ``z_bonds`` (2-D: parallel side contacts twice), ``n_rattlers``,
-    and for rods the nematic order ``s_nematic``. Rattlers follow science.md's rule for
+    and for rods the nematic order ``s_nematic`` (3-D) or ``sqrt(N) S_2``, ``sqrt(N) S_4``
+    (2-D). Rattlers follow science.md's rule for
     the frame (:class:`analysis.contacts.ContactNumber`, ``c_min`` overrides it)."""
     rows = []
     for frame, contacts in run.frames():
@@ -37,9 +38,16 @@ def frame_curves(run: RunData, c_min: int | None = None) -> pd.DataFrame:
         row = {"step": frame.step, "phi": packing_fraction(frame),
                "pressure": pressure(frame, contacts, dim=frame.dim), "z": cn.z,
                "z_rattler_free": cn.z_rattler_free, "z_bonds": cn.z_bonds,
-               "n_rattlers": cn.n_rattlers, "n": frame.n, "s_nematic": np.nan}
+               "n_rattlers": cn.n_rattlers, "n": frame.n, "s_nematic": np.nan,
+               "sqrt_n_s2": np.nan, "sqrt_n_s4": np.nan}
         if np.any(frame.length > 0):
-            row["s_nematic"] = NematicOrder().compute(frame).S
+            if frame.dim == 2:
+                from analysis.order import OrientationOrder2D
+
+                o2 = OrientationOrder2D().compute(frame)
+                row["sqrt_n_s2"], row["sqrt_n_s4"] = o2.sqrtN_S2, o2.sqrtN_S4
+            else:
+                row["s_nematic"] = NematicOrder().compute(frame).S
         rows.append(row)
     return pd.DataFrame(rows)
 

@@ -11,7 +11,8 @@ import pandas as pd
 
 from analysis import plots
 
-OBSERVABLES = ["phi_j", "z_j", "z_j_bonds", "s_nematic_j", "sqrt_n_s2", "sqrt_n_s4"]
+OBSERVABLES = ["phi_j", "z_j", "z_j_bonds", "s_nematic_j", "sqrt_n_s2", "sqrt_n_s4",
+               "fraction_side_side", "fraction_tip_side", "fraction_tip_tip"]
 
 
 def references(parameter: str, dimension: int) -> dict:
