@@ -64,8 +64,14 @@ def pressure_vs_phi(runs, out, p_scale=1.0, window=None, phi_min=None):
 
 def contacts_vs_phi(runs, out, z_iso=None, phi_min=None):
     """Contact number versus packing fraction: rattler-free (solid markers) and with
-    rattlers (open markers), one series per run; ``z_iso`` drawn as a reference."""
-    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    rattlers (open markers), one series per run; ``z_iso`` drawn as a reference. For rods
+    a second panel shows the orientational order versus packing fraction: 3-D nematic
+    ``S``, 2-D ``sqrt(N) S_2`` (solid) and ``sqrt(N) S_4`` (open)."""
+    order = [c for c in ("s_nematic", "sqrt_n_s2", "sqrt_n_s4")
+             if any(c in r["curves"] and r["curves"][c].notna().any() for r in runs)]
+    fig, axes = plt.subplots(1, 2 if order else 1, figsize=(11 if order else 6.4, 4.4),
+                             squeeze=False)
+    ax = axes[0, 0]
     for r in runs:
         cv = r["curves"]
         st = _style(r["engine"], r["seed_index"])
@@ -82,6 +88,17 @@ def contacts_vs_phi(runs, out, z_iso=None, phi_min=None):
     ax.set_xlabel(r"packing fraction $\phi$")
     ax.set_ylabel(r"contact number $z$ (filled: rattlers removed)")
     ax.legend(fontsize=7, ncol=2)
+    if order:
+        ax2 = axes[0, 1]
+        for r in runs:
+            cv = r["curves"]
+            st = _style(r["engine"], r["seed_index"])
+            for c, mfc in zip(order, ("auto", "none", "none")):
+                if c in cv:
+                    ax2.plot(cv.phi, cv[c], marker="o", ms=3, lw=0.8, mfc=mfc, **st)
+        ax2.set_xlabel(r"packing fraction $\phi$")
+        ax2.set_ylabel(" / ".join(order) + " (open: second)")
+        ax2.set_title("orientational order (disorder: S ~ 1/sqrt(N))", fontsize=9)
     _save(fig, out)
 
 
