@@ -93,7 +93,7 @@ class Frame:
             return 3
         flat = np.all(self.x[:, 2] == 0.0)
         rods = self.length > 0
-        in_plane = np.all(self.axis[rods, 2] == 0.0)
+        in_plane = np.all(np.abs(self.axis[rods, 2]) < 1e-9)  # rounding of quaternions
         return 2 if flat and in_plane else 3
 
     @property

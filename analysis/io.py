@@ -107,7 +107,9 @@ def read_particle_frames(path) -> list[Frame]:
             types=t[:, col["type"]].astype(np.int64) if "type" in col else np.ones(n, np.int64),
             x=t[:, [col["x"], col["y"], col["z"]]].copy(), radius=t[:, col["radius"]].copy(),
             axis=axis, length=length, box_lo=bounds[:, 0].copy(),
-            box=bounds[:, 1] - bounds[:, 0], periodic=periodic))
+            box=bounds[:, 1] - bounds[:, 0], periodic=periodic,
+            # a box without z extent is a 2-D packing (pysim writes 2-D runs so)
+            dimension=2 if bounds[2, 1] == bounds[2, 0] else None))
     return frames
 
 

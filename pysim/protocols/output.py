@@ -66,8 +66,13 @@ class RunFiles:
         """One frame of ``particles.dump`` and ``contacts.dump`` (pair and wall rows)."""
         s = sim.state
         rods = bool(np.any(s.length > 0)) or s.dimension == 2
+        axis = s.u
+        if s.dimension == 2:  # spines in the plane exactly (quaternion rounding aside)
+            axis = s.u.copy()
+            axis[:, 2] = 0.0
+            axis /= np.linalg.norm(axis, axis=1, keepdims=True)
         io.write_particles_frame(self.fh["particles.dump"], s.step, s.box, s.periodic, self.ids,
-                                 self.types, s.x, s.radius, axis=s.u if rods else None,
+                                 self.types, s.x, s.radius, axis=axis if rods else None,
                                  length=s.length if rods else None)
         ij, rec = sim.contact_table()
         ij_ids = self.ids[ij]
