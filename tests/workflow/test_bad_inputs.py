@@ -55,7 +55,7 @@ CASES = [
      "unknown key 'contact.stiffness'; allowed here: friction, gamma_bg, gamma_n, gamma_rot, "
      "gamma_t, k_n, k_t, law"),
     (("protocol", "name"), "shake",
-     "protocol.name = 'shake' is not allowed; use one of 'compress', 'growth'"),
+     "protocol.name = 'shake' is not allowed; use one of 'compress', 'growth', 'jammed'"),
     (("protocol", "name"), DROP, "missing key 'protocol.name'"),
     (("protocol", "phi_init"), 0.5, "protocol.phi_init = 0.5 cannot be reached by random "
                                     "insertion in 3-D; use a value <= 0.35 and compress"),
@@ -70,8 +70,8 @@ CASES = [
     (("protocol", "phi_fast"), 0.5,
      "protocol: phi_fast and rate_fast go together; give both or neither"),
     (("protocol", "phi_fnial"), 0.7,
-     "unknown key 'protocol.phi_fnial'; allowed here: dt, name, phi_fast, phi_final, phi_init, "
-     "pressure_final, rate, rate_fast"),
+     "unknown key 'protocol.phi_fnial'; allowed here: dt, integrator, k_d, name, phi_fast, "
+     "phi_final, phi_init, pressure_final, rate, rate_fast"),
     (("seed",), -1, "seed = -1 is not allowed; use a number >= 0"),
     (("seed",), DROP, "missing key 'seed'"),
     (("output",), {"dump_every": 0}, "output.dump_every = 0 is not allowed; use a number >= 1"),

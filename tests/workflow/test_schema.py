@@ -58,7 +58,7 @@ def test_bad_case_values(path, value, message):
 def test_unknown_key_is_a_typo():
     case = copy.deepcopy(GOOD_CASE)
     case["protocol"]["phi_fnial"] = 0.7
-    with pytest.raises(ConfigError, match=r"unknown key 'protocol\.phi_fnial'; allowed here: dt, name"):
+    with pytest.raises(ConfigError, match=r"unknown key 'protocol\.phi_fnial'; allowed here: dt, integrator, k_d, name"):
         validate_case(case, "case.yaml")
 
 
