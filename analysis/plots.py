@@ -159,3 +159,103 @@ def trends(summary, parameter, observables, out, title=None, references=None):
     if title:
         fig.suptitle(title, fontsize=10)
     _save(fig, out)
+
+
+def tapping_curves(runs, out, phi_max=None, n_layers: int = 4, layer_label: str = ""):
+    """Tapping: volumetric density (raw, thin; moving average over one oscillation,
+    thick) and mean angle between spines and the base versus ``1 + tap number`` on a
+    logarithmic axis, globally and per layer; all runs overlaid.
+
+    ``runs``: dicts with ``label``, ``engine``, ``index`` (run number for the colour)
+    and ``curves`` (:func:`analysis.summary.tap_curves`). ``phi_max``: ``{label: value}``
+    of aligned-packing limits drawn as reference lines on the density panels.
+    """
+    phi_max = phi_max or {}
+    fig, axes = plt.subplots(2, n_layers + 1, figsize=(3.3 * (n_layers + 1), 6.4),
+                             sharex=True, squeeze=False)
+    cmap = plt.get_cmap("tab10")
+    for r in runs:
+        cv = r["curves"]
+        x = 1.0 + cv.tap.clip(lower=0.0)
+        color = cmap(r["index"] % 10)
+        ls = "-" if r["engine"] == "pysim" else ("--" if r["engine"] == "lammps" else ":")
+        axes[0, 0].plot(x, cv.phi, color=color, lw=0.4, alpha=0.5, ls=ls)
+        axes[0, 0].plot(x, cv.phi_avg, color=color, lw=1.4, ls=ls, label=r["label"])
+        axes[1, 0].plot(x, cv.angle, color=color, lw=1.2, ls=ls)
+        for k in range(n_layers):
+            if f"phi_layer{k + 1}" not in cv:
+                continue
+            axes[0, k + 1].plot(x, cv[f"phi_layer{k + 1}"], color=color, lw=1.0, ls=ls)
+            axes[1, k + 1].plot(x, cv[f"angle_layer{k + 1}"], color=color, lw=1.0, ls=ls)
+    axes[0, 0].set_title("filled part of the cylinder", fontsize=9)
+    for k in range(n_layers):
+        axes[0, k + 1].set_title(f"layer {k + 1} {layer_label}".strip(), fontsize=9)
+    for ax in axes[0]:
+        for value in phi_max.values():
+            ax.axhline(value, color="grey", lw=0.8, ls=":")
+        ax.set_ylabel(r"volumetric density $\phi$")
+    for label, value in phi_max.items():
+        axes[0, 0].text(1.0, value, f" {label}", fontsize=6, va="bottom", color="grey")
+    for ax in axes[1]:
+        ax.set_ylabel("mean angle to the base (deg)")
+        ax.set_xlabel("1 + tap number")
+        ax.set_ylim(0, 90)
+    for ax in axes.ravel():
+        ax.set_xscale("log")
+    axes[0, 0].legend(fontsize=6, loc="lower right")
+    fig.suptitle("tapping: thin lines raw frames, thick the moving average over one oscillation; "
+                 "solid pysim, dashed LAMMPS", fontsize=9)
+    fig.tight_layout()
+    _save(fig, out)
+
+
+def _segments_panel(ax, frame, horizontal: int, select=None):
+    """Spines of the selected grains projected on the (``horizontal``, z) plane, drawn
+    as round-capped lines of the grain diameter, coloured by the angle to the base."""
+    from matplotlib.collections import LineCollection
+
+    sel = np.ones(frame.n, bool) if select is None else select
+    x, u, half = frame.x[sel], frame.axis[sel], 0.5 * frame.length[sel]
+    a = np.column_stack([x[:, horizontal] - half * u[:, horizontal], x[:, 2] - half * u[:, 2]])
+    b = np.column_stack([x[:, horizontal] + half * u[:, horizontal], x[:, 2] + half * u[:, 2]])
+    beta = np.degrees(np.arcsin(np.clip(np.abs(u[:, 2]), 0, 1)))
+    order = np.argsort(x[:, 1 - horizontal])  # far grains first
+    lc = LineCollection(np.stack([a, b], axis=1)[order], cmap="viridis", capstyle="round")
+    lc.set_array(beta[order])
+    lc.set_clim(0, 90)
+    ax.add_collection(lc)
+    return lc, 2.0 * float(np.mean(frame.radius[sel])) if sel.any() else 0.0
+
+
+def tapping_snapshots(frames, out, container_diameter: float, cut: float | None = None):
+    """Side views (all grains projected on x-z) and cuts through the cylinder axis (grains
+    whose centre lies within ``cut`` of the x-z plane, default half a grain length) of the
+    given frames: ``frames`` is a list of ``(title, Frame)``, one column each; grains
+    coloured by the angle between spine and base."""
+    ncol = len(frames)
+    fig, axes = plt.subplots(2, ncol, figsize=(2.6 * ncol + 0.8, 7.2), squeeze=False)
+    top = max(float(np.max(f.x[:, 2] + 0.5 * f.length + f.radius)) for _, f in frames)
+    rc = 0.5 * container_diameter
+    lc = None
+    for c, (title, f) in enumerate(frames):
+        width = cut if cut is not None else 0.5 * float(np.max(f.length + 2 * f.radius))
+        for r, (sel, name) in enumerate([(None, "side view"),
+                                         (np.abs(f.x[:, 1]) < width, "cut through the axis")]):
+            ax = axes[r, c]
+            lc, dia = _segments_panel(ax, f, 0, sel)
+            ax.set_xlim(-rc * 1.05, rc * 1.05)
+            ax.set_ylim(min(-0.05 * top, float(f.x[:, 2].min()) - dia), top * 1.05)
+            ax.set_aspect("equal")
+            # line width in points = grain diameter in data units
+            fig.canvas.draw()
+            bbox = ax.get_window_extent()
+            pts_per_unit = bbox.width / (2.1 * rc) * 72.0 / fig.dpi
+            lc.set_linewidth(max(dia * pts_per_unit, 0.3))
+            ax.axvline(-rc, color="k", lw=0.8)
+            ax.axvline(rc, color="k", lw=0.8)
+            ax.set_title(f"{title}\n{name}", fontsize=8)
+            ax.tick_params(labelsize=6)
+    if lc is not None:
+        cb = fig.colorbar(lc, ax=axes.ravel().tolist(), shrink=0.6)
+        cb.set_label("angle to the base (deg)")
+    _save(fig, out)

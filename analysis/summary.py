@@ -171,3 +171,71 @@ def analyse_jammed(run_dir, c_min: int | None = None):
             rows.append(("s_nematic", NematicOrder().compute(frame).S, np.nan))
     curves = frame_curves(run, c_min)
     return rows, curves, run.thermo
+
+
+def tap_curves(run: RunData, start_step: int, dt: float, period: float, amplitude: float,
+               frames_per_tap: int, container_diameter: float, layer_thickness: float,
+               n_layers: int = 4) -> pd.DataFrame:
+    """Per frame of a tapping run: ``tap`` (periods since tapping began), ``phase``
+    (index of the frame within its tap), base height ``z_base``, volumetric density
+    ``phi`` of the filled part of the cylinder (grain volume between the base and the top
+    surface over ``pi D_c^2 / 4`` times that height), its moving average ``phi_avg`` over
+    one oscillation, the surface height ``top``, the mean angle between spines and the
+    base ``angle`` (degrees), order with respect to gravity ``p2_z`` and, for each of
+    ``n_layers`` layers of ``layer_thickness`` stacked on the base, ``phi_layer<k>`` and
+    ``angle_layer<k>`` (grains assigned to layers by centre)."""
+    from analysis.order import AngleToHorizontal
+    from analysis.packing import FilledPackingFraction, layer_edges, moving_average
+    from analysis.packing import slab_packing_fraction
+
+    area = np.pi * container_diameter**2 / 4
+    omega = 2 * np.pi / period
+    rows = []
+    for frame, _contacts in run.frames():
+        t = (frame.step - start_step) * dt
+        zb = amplitude * np.sin(omega * t) if t > 0 else 0.0
+        fill = FilledPackingFraction(bottom=zb, area=area).compute(frame)
+        edges = layer_edges(zb, layer_thickness, n_layers)
+        ang = AngleToHorizontal(layers=edges).compute(frame)
+        row = {"step": frame.step, "tap": t / period,
+               "phase": int(round(t / period * frames_per_tap)) % frames_per_tap,
+               "z_base": zb, "phi": fill.phi, "top": fill.top, "angle": ang.mean_deg,
+               "p2_z": NematicOrder().compute(frame).gravity_order}
+        phil = slab_packing_fraction(frame, edges, area=area)
+        for k in range(n_layers):
+            row[f"phi_layer{k + 1}"] = phil[k]
+            row[f"angle_layer{k + 1}"] = np.degrees(ang.layer_mean[k])
+        rows.append(row)
+    curves = pd.DataFrame(rows)
+    window = frames_per_tap if frames_per_tap % 2 else frames_per_tap + 1
+    curves["phi_avg"] = moving_average(curves.phi.to_numpy(), window) if len(curves) else []
+    return curves
+
+
+def analyse_tapping(run_dir, **plan):
+    """Observables and per-frame curves (:func:`tap_curves`, keyword arguments ``plan``) of
+    a tapping run: ``phi_settled`` and ``angle_settled`` (the packing before the first
+    tap), ``phi_tapped`` and ``angle_tapped`` (means over the frames of the last tap, with
+    their standard deviation as uncertainty), the changes ``phi_gain`` and
+    ``angle_gain``, ``p2_z_tapped``, ``taps`` and the tapped angle per layer."""
+    run = RunData(run_dir)
+    curves = tap_curves(run, **plan)
+    if not len(curves):
+        raise ValueError(f"{run_dir}: no frames in particles.dump")
+    first = curves.iloc[0]
+    last_tap = curves[curves.tap > curves.tap.max() - 1.0 + 1e-9]
+    if not len(last_tap):
+        last_tap = curves.iloc[-1:]
+    rows = [("phi_settled", float(first.phi), np.nan),
+            ("angle_settled", float(first.angle), np.nan),
+            ("phi_tapped", float(last_tap.phi.mean()), float(last_tap.phi.std(ddof=0))),
+            ("angle_tapped", float(last_tap.angle.mean()), float(last_tap.angle.std(ddof=0))),
+            ("phi_gain", float(last_tap.phi.mean() - first.phi), np.nan),
+            ("angle_gain", float(last_tap.angle.mean() - first.angle), np.nan),
+            ("p2_z_tapped", float(last_tap.p2_z.mean()), np.nan),
+            ("taps", float(round(curves.tap.max(), 6)), np.nan)]
+    k = 1
+    while f"angle_layer{k}" in curves:
+        rows.append((f"angle_tapped_layer{k}", float(last_tap[f"angle_layer{k}"].mean()), np.nan))
+        k += 1
+    return rows, curves, run.thermo

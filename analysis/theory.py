@@ -107,3 +107,12 @@ def alpha_from(value, convention: str):
         return v - 1.0
     raise ValueError(f"unknown convention {convention!r}; valid: 'L/D', 'A/R', "
                      "'lambda/delta', 'd'")
+
+
+def phi_max_aligned(alpha):
+    """Densest packing of equal spherocylinders (aligned, hexagonal layers stacked so
+    that the caps nest as in fcc): ``phi_max = (pi/6 + pi alpha/4) / (sqrt(3)/2 (alpha +
+    sqrt(2/3)))``; ``pi / sqrt(18)`` for spheres, ``pi / sqrt(12)`` for infinitely long
+    rods."""
+    a = _alpha(alpha)
+    return (np.pi / 6 + np.pi * a / 4) / (np.sqrt(3) / 2 * (a + np.sqrt(2.0 / 3.0)))

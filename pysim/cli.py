@@ -53,7 +53,7 @@ def _run(case, args) -> int:
 
     import pysim
     from pysim import io
-    from pysim.protocols import compress, growth, jammed
+    from pysim.protocols import compress, growth, jammed, tapping
     from pysim.protocols.output import ResumeError
     from pysim.simulation import BlowUpError
     from workflows import provenance
@@ -67,7 +67,8 @@ def _run(case, args) -> int:
         print(f"error: {args.data} holds {len(init['ids'])} particles, the case says "
               f"particles.n = {case['particles']['n']}", file=sys.stderr)
         return 2
-    driver = {"compress": compress, "growth": growth, "jammed": jammed}[case["protocol"]["name"]]
+    driver = {"compress": compress, "growth": growth, "jammed": jammed,
+              "tapping": tapping}[case["protocol"]["name"]]
     try:
         summary = driver.run(case, init, args.out, progress=not args.no_progress,
                              resume=args.resume, checkpoint_every=args.checkpoint_every)

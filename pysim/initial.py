@@ -213,6 +213,112 @@ def random_spherocylinders(radius, length, phi: float, seed: int, dimension: int
     return x, u, radius, length, box
 
 
+@njit
+def _rsa_rods_cylinder(radius, half, rc, height, seed, max_attempts):
+    """RSA of spherocylinders inside a vertical cylinder of radius ``rc`` (axis at
+    ``x = y = 0``) between ``z = 0`` and ``height``: every spine end lies at least ``R``
+    inside the wall and between the floor and the top. Brute-force overlap tests against
+    the grains of neighbouring height bands."""
+    np.random.seed(seed)
+    n = radius.shape[0]
+    reach = radius[0] + half[0]
+    band = 2.0 * reach
+    nb = max(int(height // band), 1)
+    members = -np.ones((nb, 64), np.int64)
+    count = np.zeros(nb, np.int64)
+    x = np.zeros((n, 3))
+    u = np.zeros((n, 3))
+    p = np.zeros(3)
+    a = np.zeros(3)
+    for i in range(n):
+        placed = False
+        for _ in range(max_attempts):
+            rho = (rc - radius[i]) * np.sqrt(np.random.random())
+            th = 2.0 * np.pi * np.random.random()
+            p[0] = rho * np.cos(th)
+            p[1] = rho * np.sin(th)
+            p[2] = radius[i] + np.random.random() * (height - 2.0 * radius[i])
+            for k in range(3):
+                a[k] = np.random.normal()
+            an = np.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
+            ok = True
+            for k in range(3):
+                a[k] /= an
+            for sg in (-1.0, 1.0):
+                e0 = p[0] + sg * half[i] * a[0]
+                e1 = p[1] + sg * half[i] * a[1]
+                e2 = p[2] + sg * half[i] * a[2]
+                if e0 * e0 + e1 * e1 > (rc - radius[i]) ** 2 or e2 < radius[i] \
+                        or e2 > height - radius[i]:
+                    ok = False
+            if not ok:
+                continue
+            b = min(int(p[2] / band), nb - 1)
+            for bb in range(max(b - 1, 0), min(b + 2, nb)):
+                if not ok:
+                    break
+                for q in range(count[bb]):
+                    j = members[bb, q]
+                    r0 = p[0] - x[j, 0]
+                    r1 = p[1] - x[j, 1]
+                    r2 = p[2] - x[j, 2]
+                    s, tt = closest_params(r0, r1, r2, a[0], a[1], a[2], half[i],
+                                           u[j, 0], u[j, 1], u[j, 2], half[j])
+                    g0 = r0 + s * a[0] - tt * u[j, 0]
+                    g1 = r1 + s * a[1] - tt * u[j, 1]
+                    g2 = r2 + s * a[2] - tt * u[j, 2]
+                    rs = radius[i] + radius[j]
+                    if g0 * g0 + g1 * g1 + g2 * g2 < rs * rs:
+                        ok = False
+                        break
+            if ok:
+                x[i, :] = p
+                u[i, :] = a
+                if count[b] == members.shape[1]:
+                    bigger = -np.ones((nb, 2 * members.shape[1]), np.int64)
+                    bigger[:, : members.shape[1]] = members
+                    members = bigger
+                members[b, count[b]] = i
+                count[b] += 1
+                placed = True
+                break
+        if not placed:
+            return x, u, i
+    return x, u, n
+
+
+def random_spherocylinders_in_cylinder(radius, length, phi: float, diameter_c: float, seed: int,
+                                       max_attempts: int = 1_000_000):
+    """Random non-overlapping spherocylinders (isotropic orientations) inside a vertical
+    cylinder of inner diameter ``diameter_c`` (axis ``x = y = 0``) above a floor at
+    ``z = 0``, filled to the height ``H`` at which the grains occupy a fraction ``phi`` of
+    the cylinder: ``H = sum V_i / (phi pi D_c^2 / 4)``. Random sequential addition.
+
+    Returns ``(x, u, radius, length, height)`` in insertion order (decreasing reach).
+    Raises ``RuntimeError`` when insertion stalls (lower ``phi``).
+    """
+    from pysim.state import volume
+
+    radius = np.asarray(radius, dtype=np.float64)
+    length = np.broadcast_to(np.asarray(length, dtype=np.float64), radius.shape)
+    order = np.argsort(-(radius + length / 2), kind="stable")
+    radius, length = radius[order].copy(), length[order].copy()
+    if not 0 < phi < 1:
+        raise ValueError(f"packing fraction must be in (0, 1), got {phi}")
+    rc = 0.5 * float(diameter_c)
+    if not rc > radius[0] + length[0] / 2:
+        raise ValueError(f"cylinder diameter {diameter_c:.4g} is too narrow for grains of length "
+                         f"{2 * radius[0] + length[0]:.4g}")
+    height = float(volume(radius, length).sum() / (phi * np.pi * rc * rc))
+    height = max(height, 2.0 * (radius[0] + length[0] / 2))
+    x, u, placed = _rsa_rods_cylinder(radius, length / 2, rc, height, int(seed) % (2**32),
+                                      int(max_attempts))
+    if placed < len(radius):
+        raise RuntimeError(f"random insertion placed only {placed} of {len(radius)} "
+                           f"spherocylinders in the cylinder at phi = {phi}; lower phi_init")
+    return x, u, radius, length, height
+
+
 def random_spheres(diameters: np.ndarray, phi: float, seed: int, max_attempts: int = 1_000_000):
     """Place spheres with the given diameters without overlap in a periodic cube at
     packing fraction ``phi``.
@@ -262,9 +368,31 @@ def write_initial(case: dict, path) -> None:
     dim = p.get("dimension", 3)
     alpha = p.get("aspect_ratio", 0.0)
     title = f"rodpack random start, seed {seed}, phi {phi}"
+    if "container" in case:
+        dc = case["container"]["diameter"]
+        x, u, r, length, height = random_spherocylinders_in_cylinder(d / 2.0, alpha * d, phi, dc,
+                                                                     seed)
+        pr = case["protocol"]
+        amp = case["gravity"] * pr["intensity"] / (2 * np.pi * pr["frequency"]) ** 2
+        lo, box = container_box(dc, height, float(np.max(2 * r + length)), amp)
+        write_rod_data(path, x, u, r, length, box, p.get("density", 1.0), title=title + " in a "
+                       f"cylinder of diameter {dc:g}", box_lo=lo)
+        return
     if dim == 3 and alpha == 0:
         x, d, box = random_spheres(d, phi, seed)
         write_sphere_data(path, x, d, box, p.get("density", 1.0), title=title)
         return
     x, u, r, length, box = random_spherocylinders(d / 2.0, alpha * d, phi, seed, dimension=dim)
     write_rod_data(path, x, u, r, length, box, p.get("density", 1.0), dimension=dim, title=title)
+
+
+def container_box(diameter_c: float, height: float, longest: float,
+                  depth: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """``(box_lo, box)`` around a cylinder of diameter ``diameter_c`` on its axis
+    ``x = y = 0``: the square cross-section plus a margin of one ``longest`` grain, from
+    ``depth`` plus a grain below the base (which oscillates down to ``-depth``) to a grain
+    above the initial fill ``height``."""
+    half = 0.5 * diameter_c + longest
+    lo = np.array([-half, -half, -(depth + longest)])
+    hi = np.array([half, half, height + longest])
+    return lo, hi - lo

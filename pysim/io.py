@@ -162,14 +162,15 @@ def read_sphere_data(path):
 
 
 def write_rod_data(path, x, axis, radius, length, box, density, dimension=3,
-                   title="rodpack initial configuration"):
+                   title="rodpack initial configuration", box_lo=(0.0, 0.0, 0.0)):
     """Write spherocylinders as a LAMMPS data file for ``atom_style ellipsoid``.
 
     Each rod is an atom with an ``Ellipsoids`` entry ``id D D L+D qw qx qy qz``: the long
     (body z) axis is the spine, the quaternion rotates body into lab axes (the pysim
     convention), so LAMMPS, OVITO and pysim read the same orientations. The atom
     ``density`` column holds the material density (engines derive masses from their own
-    representation of the rod). 2-D files have ``z = 0`` and ``zlo zhi = -0.5 0.5``.
+    representation of the rod). 2-D files have ``z = 0`` and ``zlo zhi = -0.5 0.5``; the
+    box spans ``box_lo`` to ``box_lo + box``.
     """
     from pysim.rotation import quaternions_from_axes
 
@@ -183,7 +184,7 @@ def write_rod_data(path, x, axis, radius, length, box, density, dimension=3,
         if k == 2 and dimension == 2:
             lines.append("-0.5 0.5 zlo zhi")
         else:
-            lines.append(f"0.0 {box[k]:.16g} {ax}lo {ax}hi")
+            lines.append(f"{box_lo[k]:.16g} {box_lo[k] + box[k]:.16g} {ax}lo {ax}hi")
     lines += ["", "Atoms # ellipsoid", ""]
     lines += [f"{i + 1} 1 1 {density:.16g} {x[i, 0]:.16g} {x[i, 1]:.16g} {x[i, 2]:.16g}"
               for i in range(n)]

@@ -379,6 +379,16 @@ class Simulation:
         self._rebuild()
         self.compute_forces()
 
+    def set_drag(self, gamma_bg: float, gamma_rot: float):
+        """Change the background drag on translation (force/velocity) and rotation
+        (torque/angular velocity) from now on (the model keeps its own values; checkpoints
+        keep the current ones)."""
+        if gamma_bg < 0 or gamma_rot < 0:
+            raise ValueError(f"drags must be >= 0, got gamma_bg = {gamma_bg}, "
+                             f"gamma_rot = {gamma_rot}")
+        self.sys[itg.GAMMA_BG] = float(gamma_bg)
+        self.sys[itg.GAMMA_ROT] = float(gamma_rot)
+
     def stress(self) -> np.ndarray:
         """Contact stress ``sigma_ab = (1/V) sum_c l^c_a F^c_b`` (tension positive) of the
         last force evaluation (pair contacts; walls excluded)."""

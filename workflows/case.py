@@ -242,6 +242,8 @@ def _check_case(case: dict, source: str, at: str):
             f"{source}: {at}protocol.phi_init = {pr['phi_init']} cannot be reached by random "
             f"insertion in {dim}-D; use a value <= {phi_insert} and compress")
     phi_end = {"compress": pr.get("phi_final"), "jammed": pr.get("phi_max")}.get(pr["name"], 0.75)
+    _derive_contact(case, source, at)
+    _check_container(case, source, at)
     if pr["name"] == "compress":
         if pr["phi_final"] <= pr["phi_init"]:
             raise ConfigError(f"{source}: {at}protocol.phi_final = {pr['phi_final']} must be "
@@ -279,6 +281,8 @@ def _check_case(case: dict, source: str, at: str):
         raise ConfigError(
             f"{source}: {at}particles.n = {p['n']} needs about {need / 2**30:.1f} GiB, more than "
             f"this machine's {have / 2**30:.1f} GiB; use fewer particles")
+    if "container" in case:
+        return
     # the periodic box at the end must hold the longest particle plus skin twice
     vol = p["n"] * particle_measure(dmean, alpha, dim)
     side = (vol / phi_end) ** (1 / dim)
@@ -289,6 +293,83 @@ def _check_case(case: dict, source: str, at: str):
             f"{source}: {at}particles.n = {p['n']} is too small for a periodic box at packing "
             f"fraction {phi_end} (side {side:.3g} < twice the particle length plus skin); "
             f"use n >= {n_min}")
+
+
+def restitution_law(e_n: float, t_c: float, m_eff: float) -> tuple[float, float]:
+    """``(k_n, gamma_n)`` of the linear spring-dashpot with restitution ``e_n`` and contact
+    time ``t_c`` for reduced mass ``m_eff`` (science.md section 3): ``zeta = -ln e /
+    sqrt(pi^2 + ln^2 e)``, ``omega_0 = pi / (t_c sqrt(1 - zeta^2))``, ``k = m_eff
+    omega_0^2``, ``gamma = 2 zeta m_eff omega_0``."""
+    if not 0 < e_n <= 1:
+        raise ValueError(f"restitution must be in (0, 1], got {e_n}")
+    ln_e = math.log(e_n)
+    zeta = -ln_e / math.sqrt(math.pi**2 + ln_e**2)
+    w0 = math.pi / (t_c * math.sqrt(1.0 - zeta**2))
+    return m_eff * w0**2, 2.0 * zeta * m_eff * w0
+
+
+def _derive_contact(case: dict, source: str, at: str):
+    """Fill ``k_n`` and ``gamma_n`` (and, with friction, ``k_t``/``gamma_t`` defaults) from
+    ``restitution`` and ``contact_time``; a case that gives both forms must agree."""
+    c = case["contact"]
+    p = case["particles"]
+    has_e = "restitution" in c
+    if has_e != ("contact_time" in c):
+        raise ConfigError(f"{source}: {at}contact: restitution and contact_time go together; "
+                          "give both or neither")
+    if not has_e:
+        if "k_n" not in c:
+            raise ConfigError(f"{source}: {at}contact.k_n is required (or give restitution and "
+                              "contact_time)")
+        return
+    if c["law"] != "hooke":
+        raise ConfigError(f"{source}: {at}contact.restitution needs law: hooke, not "
+                          f"{c['law']!r} (give k_n and gamma_n instead)")
+    m = p["density"] * particle_measure(p["diameter"]["mean"], p["aspect_ratio"], p["dimension"])
+    k_n, gamma_n = restitution_law(c["restitution"], c["contact_time"], 0.5 * m)
+    derived = {"k_n": k_n, "gamma_n": gamma_n}
+    if c.get("friction", 0.0) > 0:
+        derived["k_t"] = c["k_t"] if c.get("k_t", 0.0) > 0 else 2.0 / 7.0 * k_n
+        derived["gamma_t"] = c["gamma_t"] if c.get("gamma_t", 0.0) > 0 else 0.5 * gamma_n
+    for key in ("k_n", "gamma_n"):
+        given = c.get(key)
+        if key == "gamma_n" and given == 0.0 and "k_n" not in c:
+            given = None  # the schema default, not a value the user gave
+        if given is not None and not math.isclose(given, derived[key], rel_tol=1e-9):
+            raise ConfigError(
+                f"{source}: {at}contact.{key} = {given} contradicts restitution "
+                f"{c['restitution']} and contact_time {c['contact_time']} (which give "
+                f"{derived[key]:.6g}); give one form only")
+    c.update(derived)
+
+
+def _check_container(case: dict, source: str, at: str):
+    """Container cases: a tapping protocol needs a container and gravity; the cylinder
+    must be wider than the longest grain."""
+    pr = case["protocol"]
+    p = case["particles"]
+    cont = case.get("container")
+    if pr["name"] == "tapping":
+        if cont is None:
+            raise ConfigError(f"{source}: {at}container is required by protocol 'tapping' "
+                              "(e.g. container: {shape: cylinder, diameter: 8.0e-3})")
+        if not case["gravity"] > 0:
+            raise ConfigError(f"{source}: {at}gravity = {case['gravity']} must be > 0 for "
+                              "protocol 'tapping'")
+        if p["dimension"] != 3:
+            raise ConfigError(f"{source}: {at}particles.dimension = {p['dimension']}: protocol "
+                              "'tapping' is 3-D (a cylinder); use 3")
+    elif cont is not None:
+        raise ConfigError(f"{source}: {at}container is only used by protocol 'tapping', not "
+                          f"{pr['name']!r}; remove it")
+    if cont is None:
+        return
+    dmax = size_extremes(p["diameter"])[2]
+    longest = dmax * (1.0 + p["aspect_ratio"])
+    if cont["diameter"] <= 1.5 * longest:
+        raise ConfigError(
+            f"{source}: {at}container.diameter = {cont['diameter']} must exceed 1.5 times the "
+            f"longest grain (L + D = {longest:.4g}); use a wider cylinder")
 
 
 def load_case(path) -> dict:

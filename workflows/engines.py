@@ -47,8 +47,15 @@ def supports(engine: str, case: dict) -> str | None:
         return None
     k = kind(case)
     name = case["protocol"]["name"]
+    if name == "tapping":
+        if engine == "liggghts":
+            return ("no LIGGGHTS tapping deck yet (it needs multisphere rods on a moving mesh "
+                    "base)")
+        if k != "rods":
+            return f"the {engine} tapping deck is for rods (aspect_ratio > 0)"
+        return None
     if name != "compress":
-        return f"{engine} runs only the 'compress' protocol here, not '{name}'"
+        return f"{engine} runs only the 'compress' and 'tapping' protocols here, not '{name}'"
     if case["protocol"].get("integrator", "verlet") != "verlet":
         return f"{engine} integrates inertial dynamics only (no overdamped integrator)"
     if k == "2d":
@@ -66,7 +73,11 @@ def deck(engine: str, case: dict) -> Path:
     reason = supports(engine, case)
     if reason:
         raise EngineError(reason)
-    return INPUTS / engine / f"in.{kind(case)}.compress"
+    return INPUTS / engine / f"in.{kind(case)}.{DECK_SUFFIX[case['protocol']['name']]}"
+
+
+#: deck file suffix of each protocol the peer engines run
+DECK_SUFFIX = {"compress": "compress", "tapping": "tap"}
 
 
 def glued_spheres(length: float, diameter: float, spacing: float) -> int:
@@ -77,8 +88,53 @@ def glued_spheres(length: float, diameter: float, spacing: float) -> int:
     return int(np.ceil(length / (spacing * diameter) - 1e-9)) + 1
 
 
+def _rod_vars(case: dict) -> dict:
+    """Spheres per glued rod and the ghost cutoff ``fix rigid/small`` needs (a body
+    reaches as far as its length from its owner atom)."""
+    from workflows.case import size_extremes
+
+    p = case["particles"]
+    d = p["diameter"]["mean"]
+    dmax = size_extremes(p["diameter"])[2]
+    return {"spheres": glued_spheres(p["aspect_ratio"] * d, d, p.get("glued_spacing", 0.25)),
+            "ghost_cut": (p["aspect_ratio"] + 1.0) * dmax + 0.2 * dmax}
+
+
+def tap_deck_vars(case: dict) -> dict[str, str]:
+    """``-var`` values of the tapping deck (``in.rods.tap``) for a case: the same step
+    plan as pysim's (:func:`pysim.protocols.tapping.plan`)."""
+    from pysim.protocols.tapping import plan, settle_drag
+
+    c, pr = case["contact"], case["protocol"]
+    tp = plan(pr, case["gravity"])
+    gamma_n = c.get("gamma_n", 0.0)
+    v = {"k_n": c["k_n"], "gamma_n": gamma_n, "k_t": c.get("k_t", 0.0),
+         "x_gamma_t": c.get("gamma_t", 0.0) / gamma_n if gamma_n > 0 else 0.0,
+         "mu": c.get("friction", 0.0), "mu_wall": c.get("wall_friction", c.get("friction", 0.0)),
+         "g": case["gravity"], "radius_c": 0.5 * case["container"]["diameter"], "dt": pr["dt"],
+         "drag": settle_drag(case)[0], "settle_steps": tp.settle_steps,
+         "relax_steps": tp.start - tp.settle_steps, "freq": 1.0 / tp.period,
+         "amp": tp.amplitude, "taps": pr["taps"], "frames_per_tap": tp.frames_per_tap,
+         "thermo_every": case.get("output", {}).get("thermo_every", 1000),
+         "skin": 0.2 * case["particles"]["diameter"]["mean"], **_rod_vars(case)}
+    return {k: repr(float(x)) if isinstance(x, float) else str(x) for k, x in v.items()}
+
+
+def restart_interval(case: dict) -> int:
+    """Steps between LAMMPS restart files: every :data:`RESTART_DUMPS` dump intervals
+    (tapping: frame intervals)."""
+    if case["protocol"]["name"] == "tapping":
+        from pysim.protocols.tapping import plan
+
+        tp = plan(case["protocol"], case["gravity"])
+        return RESTART_DUMPS * max(int(np.diff(tp.frame_steps).max()), 1)
+    return RESTART_DUMPS * case.get("output", {}).get("dump_every", 4000)
+
+
 def deck_vars(case: dict, engine: str) -> dict[str, str]:
-    """``-var`` values of a compression deck for a case."""
+    """``-var`` values of the case's deck (compression or tapping)."""
+    if case["protocol"]["name"] == "tapping":
+        return tap_deck_vars(case)
     c, pr = case["contact"], case["protocol"]
     out = case.get("output", {})
     v = {
@@ -94,14 +150,7 @@ def deck_vars(case: dict, engine: str) -> dict[str, str]:
     if "pressure_final" in pr:
         v["p_final"] = pr["pressure_final"]
     if kind(case) == "rods":
-        p = case["particles"]
-        d = p["diameter"]["mean"]
-        v["spheres"] = glued_spheres(p["aspect_ratio"] * d, d, p.get("glued_spacing", 0.25))
-        # fix rigid/small needs ghost atoms as far as a body reaches from its owner atom
-        from workflows.case import size_extremes
-
-        dmax = size_extremes(p["diameter"])[2]
-        v["ghost_cut"] = (p["aspect_ratio"] + 1.0) * dmax + 0.2 * dmax
+        v.update(_rod_vars(case))
         for key in ("mu", "k_t"):
             v.pop(key)
     elif engine == "lammps":
@@ -190,8 +239,7 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
         work.mkdir(parents=True)
         io.atomic_write_text(work / "resume.json", json.dumps(stamp))
     if engine == "lammps":
-        out = case.get("output", {})
-        extra["restart_every"] = RESTART_DUMPS * out.get("dump_every", 4000)
+        extra["restart_every"] = restart_interval(case)
     engine_data = Path(data).resolve()
     if kind(case) == "rods":
         engine_data = (work / "glued.data").resolve()

@@ -24,9 +24,11 @@ class ResumeError(RuntimeError):
 
 
 class RunFiles:
-    """The growing output files of one run (``extra`` names extra whitespace tables)."""
+    """The growing output files of one run (``extra`` names extra whitespace tables).
+    Positions are written as ``origin`` plus the state's (box-relative) positions."""
 
-    def __init__(self, out_dir, ids, extra: dict[str, str] | None = None):
+    def __init__(self, out_dir, ids, extra: dict[str, str] | None = None, origin=(0.0, 0.0, 0.0)):
+        self.origin = np.asarray(origin, dtype=np.float64)
         self.dir = Path(out_dir)
         self.dir.mkdir(parents=True, exist_ok=True)
         self.ids = np.asarray(ids)
@@ -71,9 +73,11 @@ class RunFiles:
             axis = s.u.copy()
             axis[:, 2] = 0.0
             axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+        shifted = bool(np.any(self.origin != 0.0))
         io.write_particles_frame(self.fh["particles.dump"], s.step, s.box, s.periodic, self.ids,
-                                 self.types, s.x, s.radius, axis=axis if rods else None,
-                                 length=s.length if rods else None)
+                                 self.types, s.x + self.origin if shifted else s.x, s.radius,
+                                 axis=axis if rods else None, length=s.length if rods else None,
+                                 box_lo=self.origin)
         ij, rec = sim.contact_table()
         ij_ids = self.ids[ij]
         if sim.n_walls:
@@ -81,7 +85,11 @@ class RunFiles:
             wall_ids = np.column_stack([self.ids[iw[:, 0]], -(iw[:, 1] + 1)])
             ij_ids = np.vstack([ij_ids, wall_ids])
             rec = np.vstack([rec, wrec])
-        io.write_contacts_frame(self.fh["contacts.dump"], s.step, s.box, s.periodic, ij_ids, rec)
+        if shifted:
+            rec = rec.copy()
+            rec[:, 0:3] += self.origin
+        io.write_contacts_frame(self.fh["contacts.dump"], s.step, s.box, s.periodic, ij_ids, rec,
+                                box_lo=self.origin)
 
     def thermo(self, row):
         io.write_thermo_row(self.fh["thermo.dat"], row)

@@ -93,3 +93,45 @@ rule body_check:
     shell:
         "{PYTHON} -m workflows.scripts.body_check --alpha 2 --work {params.work}"
         " --table {output.table} --figure {output.figure} 2> {log}"
+
+
+rule plot_tapping:
+    input:
+        lambda wc: [
+            f"{d}/{name}" for d in run_dirs(wc.study) for name in ("curves.csv", "run.json")
+        ],
+    output:
+        report(
+            f"{RESULTS}/{{study}}/figures/tapping.png",
+            caption="../report/tapping.rst",
+            category="{study}",
+        ),
+    log:
+        f"{RESULTS}/{{study}}/figures/tapping.log",
+    params:
+        dirs=lambda wc: " ".join(run_dirs(wc.study)),
+    shell:
+        "{PYTHON} -m workflows.scripts.plot_tapping --curves-out {output} {params.dirs} 2> {log}"
+
+
+rule plot_tapping_snapshots:
+    input:
+        lambda wc: [
+            f"{d}/{name}"
+            for d in run_dirs(wc.study, wc.variant)
+            for name in ("curves.csv", "run.json")
+        ],
+    output:
+        report(
+            f"{RESULTS}/{{study}}/figures/{{variant}}.snapshots.png",
+            caption="../report/snapshots.rst",
+            category="{study}",
+            subcategory="{variant}",
+        ),
+    log:
+        f"{RESULTS}/{{study}}/figures/{{variant}}.snapshots.log",
+    params:
+        dirs=lambda wc: " ".join(run_dirs(wc.study, wc.variant)),
+    shell:
+        "{PYTHON} -m workflows.scripts.plot_tapping --snapshots-out {output}"
+        " --taps 0 -1 {params.dirs} 2> {log}"

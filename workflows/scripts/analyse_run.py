@@ -7,12 +7,25 @@ import sys
 from pathlib import Path
 
 from analysis.summary import (TIDY_COLUMNS, analyse_compression, analyse_growth,
-                              analyse_jammed, tidy)
+                              analyse_jammed, analyse_tapping, tidy)
 from pysim.io import atomic_write_text
 from workflows.case import ConfigError, load_case
 
 #: provenance columns copied from run.json into every result row
 PROVENANCE = ("engine_version", "case_hash", "git_revision")
+
+
+def tap_plan(case: dict) -> dict:
+    """Keyword arguments of :func:`analysis.summary.tap_curves` for a tapping case: the
+    step plan of the protocol and layers of half the container diameter (the 4 mm layers
+    of the 8 mm cylinder of science.md)."""
+    from pysim.protocols.tapping import plan
+
+    tp = plan(case["protocol"], case["gravity"])
+    dc = case["container"]["diameter"]
+    return {"start_step": tp.start, "dt": tp.dt, "period": tp.period,
+            "amplitude": tp.amplitude, "frames_per_tap": tp.frames_per_tap,
+            "container_diameter": dc, "layer_thickness": dc / 2, "n_layers": 4}
 
 
 def main(argv=None) -> int:
@@ -46,6 +59,8 @@ def main(argv=None) -> int:
         rows, curves, _thermo = analyse_growth(a.run)
     elif case["protocol"]["name"] == "jammed":
         rows, curves, _thermo = analyse_jammed(a.run)
+    elif case["protocol"]["name"] == "tapping":
+        rows, curves, _thermo = analyse_tapping(a.run, **tap_plan(case))
     else:
         rows, curves, _thermo = analyse_compression(a.run, a.window, p_scale)
     df = tidy(rows, a.study, a.variant, a.engine, a.seed, json.loads(a.parameters))

@@ -1,0 +1,83 @@
+"""Figures of a tapping study: density and mean angle versus tap number for every run
+(``--curves-out``), and snapshots of one variant's runs (``--snapshots-out``)."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from analysis import plots, theory
+from analysis.io import read_particle_frames
+from workflows.case import ConfigError, load_case
+
+
+def _ok_runs(run_dirs):
+    for d in run_dirs:
+        if json.loads((d / "run.json").read_text()).get("status") == "ok":
+            yield d
+
+
+def curves_figure(run_dirs, out: Path) -> int:
+    runs, limits = [], {}
+    variants = sorted({d.parent.parent.name for d in run_dirs})
+    for d in _ok_runs(run_dirs):
+        case = load_case(d.parent / "case.yaml")
+        alpha = case["particles"]["aspect_ratio"]
+        limits[rf"$\phi_{{max}}(\alpha={alpha:g})$"] = float(theory.phi_max_aligned(alpha))
+        variant, seed, engine = d.parent.parent.name, d.parent.name, d.name
+        runs.append({"label": f"{variant} {engine} {seed}", "engine": engine,
+                     "index": variants.index(variant), "curves": pd.read_csv(d / "curves.csv")})
+    if not runs:
+        plots.message_figure(out, "no successful tapping run to draw: see failures.csv")
+        return 0
+    thickness = load_case(next(iter(_ok_runs(run_dirs))).parent / "case.yaml")["container"]
+    plots.tapping_curves(runs, out, phi_max=limits,
+                         layer_label=f"({thickness['diameter'] / 2 * 1e3:g} mm thick)"
+                         if thickness["diameter"] < 0.1 else "")
+    return 0
+
+
+def snapshots_figure(run_dirs, out: Path, taps: list[float]) -> int:
+    frames, dc = [], None
+    for d in _ok_runs(run_dirs):
+        case = load_case(d.parent / "case.yaml")
+        dc = case["container"]["diameter"]
+        cv = pd.read_csv(d / "curves.csv")
+        parts = {f.step: f for f in read_particle_frames(d / "particles.dump")}
+        for tap in taps:
+            at = cv[cv.phase == 0] if (cv.phase == 0).any() else cv
+            row = at.iloc[int(np.argmin(np.abs(at.tap.to_numpy() - min(tap, at.tap.max()))))]
+            frames.append((f"{d.name}, tap {row.tap:.0f}", parts[int(row.step)]))
+    if not frames:
+        plots.message_figure(out, "no successful tapping run to draw: see failures.csv")
+        return 0
+    plots.tapping_snapshots(frames, out, dc)
+    return 0
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--curves-out", type=Path, help="density and angle versus taps (PNG)")
+    ap.add_argument("--snapshots-out", type=Path, help="snapshots of the runs (PNG)")
+    ap.add_argument("--taps", type=float, nargs="+", default=[0.0, -1.0],
+                    help="taps to render (-1: the last one)")
+    ap.add_argument("run_dirs", nargs="+", type=Path)
+    a = ap.parse_args(argv)
+    try:
+        if a.curves_out:
+            curves_figure(a.run_dirs, a.curves_out)
+        if a.snapshots_out:
+            taps = [t if t >= 0 else np.inf for t in a.taps]
+            snapshots_figure(a.run_dirs, a.snapshots_out, taps)
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
