@@ -46,16 +46,17 @@ CASES = [
     (("contact", "law"), "hook",
      "contact.law = 'hook' is not allowed; use one of 'hooke', 'hertz', 'harmonic'"),
     (("contact", "k_n"), 0, "contact.k_n = 0 is not allowed; use a number > 0"),
-    (("contact", "k_n"), DROP, "missing key 'contact.k_n'"),
+    (("contact", "k_n"), DROP,
+     "contact.k_n is required (or give restitution and contact_time)"),
     (("contact", "gamma_n"), -1, "contact.gamma_n = -1 is not allowed; use a number >= 0"),
     (("contact", "friction"), 0.5, "contact.k_t = 0.0 must be > 0 when friction = 0.5 > 0"),
     (("contact", "friction"), -0.1,
      "contact.friction = -0.1 is not allowed; use a number >= 0 and <= 10"),
     (("contact", "stiffness"), 5,
-     "unknown key 'contact.stiffness'; allowed here: friction, gamma_bg, gamma_n, gamma_rot, "
-     "gamma_t, k_n, k_t, law"),
+     "unknown key 'contact.stiffness'; allowed here: contact_time, friction, gamma_bg, gamma_n, "
+     "gamma_rot, gamma_t, k_n, k_t, law, restitution, wall_friction"),
     (("protocol", "name"), "shake",
-     "protocol.name = 'shake' is not allowed; use one of 'compress', 'growth', 'jammed'"),
+     "protocol.name = 'shake' is not allowed; use one of 'compress', 'growth', 'jammed', 'tapping'"),
     (("protocol", "name"), DROP, "missing key 'protocol.name'"),
     (("protocol", "phi_init"), 0.5, "protocol.phi_init = 0.5 cannot be reached by random "
                                     "insertion in 3-D; use a value <= 0.35 and compress"),
@@ -78,7 +79,8 @@ CASES = [
     (("output",), {"thermo_every": "often"},
      "output.thermo_every = 'often' is not allowed; use a value of type integer"),
     (("extra",), 1,
-     "unknown key 'extra'; allowed here: contact, output, particles, protocol, seed"),
+     "unknown key 'extra'; allowed here: contact, container, gravity, output, particles, "
+     "protocol, seed"),
 ]
 
 

@@ -45,7 +45,7 @@ def test_good_case_gets_defaults():
     (("protocol", "dt"), 1e-2, r"protocol\.dt = 0\.01 is above 0\.1 of the contact time"),
     (("particles", "n"), "many", r"particles\.n = 'many' .*type integer"),
     (("particles", "n"), 10, r"particles\.n = 10 is too small for a periodic box"),
-    (("contact", "k_n"), KeyError, r"missing key 'contact\.k_n'"),
+    (("contact", "k_n"), KeyError, r"contact\.k_n is required \(or give restitution and contact_time\)"),
     (("contact", "friction"), 0.5, r"contact\.k_t = 0\.0 must be > 0 when friction"),
 ])
 def test_bad_case_values(path, value, message):
