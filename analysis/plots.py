@@ -200,8 +200,12 @@ def tapping_curves(runs, out, phi_max=None, n_layers: int = 4, layer_label: str 
         ax.set_ylabel("mean angle to the base (deg)")
         ax.set_xlabel("1 + tap number")
         ax.set_ylim(0, 90)
+    from matplotlib.ticker import LogLocator, NullFormatter, ScalarFormatter
     for ax in axes.ravel():
         ax.set_xscale("log")
+        ax.xaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+        ax.xaxis.set_major_formatter(ScalarFormatter())
+        ax.xaxis.set_minor_formatter(NullFormatter())
     axes[0, 0].legend(fontsize=6, loc="lower right")
     fig.suptitle("tapping: thin lines raw frames, thick the moving average over one oscillation; "
                  "solid pysim, dashed LAMMPS", fontsize=9)
@@ -227,11 +231,20 @@ def _segments_panel(ax, frame, horizontal: int, select=None):
     return lc, 2.0 * float(np.mean(frame.radius[sel])) if sel.any() else 0.0
 
 
+def _nice_step(span: float, ticks: int = 4) -> float:
+    """A 1-2-5 step giving about ``ticks`` ticks over ``span``."""
+    raw = max(span / ticks, 1e-12)
+    mag = 10.0 ** np.floor(np.log10(raw))
+    return float(mag * min((m for m in (1.0, 2.0, 5.0, 10.0) if m * mag >= raw)))
+
+
 def tapping_snapshots(frames, out, container_diameter: float, cut: float | None = None):
     """Side views (all grains projected on x-z) and cuts through the cylinder axis (grains
     whose centre lies within ``cut`` of the x-z plane, default half a grain length) of the
     given frames: ``frames`` is a list of ``(title, Frame)``, one column each; grains
     coloured by the angle between spine and base."""
+    from matplotlib.ticker import FuncFormatter, MultipleLocator
+
     ncol = len(frames)
     fig, axes = plt.subplots(2, ncol, figsize=(2.6 * ncol + 0.8, 7.2), squeeze=False)
     top = max(float(np.max(f.x[:, 2] + 0.5 * f.length + f.radius)) for _, f in frames)
@@ -255,6 +268,15 @@ def tapping_snapshots(frames, out, container_diameter: float, cut: float | None 
             ax.axvline(rc, color="k", lw=0.8)
             ax.set_title(f"{title}\n{name}", fontsize=8)
             ax.tick_params(labelsize=6)
+            # ticks in grain diameters: readable whatever the unit system
+            ax.xaxis.set_major_locator(MultipleLocator(_nice_step(2 * rc / dia) * dia))
+            ax.yaxis.set_major_locator(MultipleLocator(_nice_step(top / dia) * dia))
+            ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _, d=dia: f"{v / d:.0f}"))
+            ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _, d=dia: f"{v / d:.0f}"))
+            if r == 1:
+                ax.set_xlabel("x / D", fontsize=7)
+            if c == 0:
+                ax.set_ylabel("z / D", fontsize=7)
     if lc is not None:
         cb = fig.colorbar(lc, ax=axes.ravel().tolist(), shrink=0.6)
         cb.set_label("angle to the base (deg)")

@@ -134,4 +134,4 @@ rule plot_tapping_snapshots:
         dirs=lambda wc: " ".join(run_dirs(wc.study, wc.variant)),
     shell:
         "{PYTHON} -m workflows.scripts.plot_tapping --snapshots-out {output}"
-        " --taps 0 -1 {params.dirs} 2> {log}"
+        " {params.dirs} --taps 0 -1 2> {log}"
