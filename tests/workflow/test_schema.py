@@ -100,3 +100,49 @@ def test_cli_bad_case_exit_2_no_traceback_no_output(tmp_path):
     assert r.stderr.strip().count("\n") == 0
     assert "protocol.phi_final = 1.5" in r.stderr
     assert not out.exists()
+
+
+def tap_case(**changes):
+    from tests.pysim.test_tapping import TAP
+
+    case = copy.deepcopy(TAP)
+    for path, value in changes.items():
+        *head, last = path.split("__")
+        d = case
+        for k in head:
+            d = d[k]
+        if value is KeyError:
+            del d[last]
+        else:
+            d[last] = value
+    return case
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"container": KeyError}, r"container is required by protocol 'tapping'"),
+    ({"gravity": 0.0}, r"gravity = 0\.0 must be > 0 for protocol 'tapping'"),
+    ({"particles__dimension": 2}, r"particles\.dimension = 2: protocol 'tapping' is 3-D"),
+    ({"container__diameter": 2e-3}, r"container\.diameter = 0\.002 must exceed 1\.5 times the "
+                                    r"longest grain \(L \+ D = 0\.001569\)"),
+    ({"container__shape": "box"}, r"container\.shape = 'box' is not allowed; use one of "
+                                  r"'cylinder'"),
+    ({"contact__contact_time": KeyError}, r"restitution and contact_time go together"),
+    ({"contact__restitution": 1.5}, r"contact\.restitution = 1\.5 .*<= 1"),
+    ({"contact__law": "hertz"}, r"contact\.restitution needs law: hooke, not 'hertz'"),
+    ({"contact__k_n": 50.0}, r"contact\.k_n = 50\.0 contradicts restitution 0\.4 and "
+                             r"contact_time 0\.0006 \(which give [0-9.]+\)"),
+    ({"protocol__intensity": KeyError}, r"missing key 'protocol\.intensity'"),
+    ({"protocol__phi_init": 0.4}, r"protocol\.phi_init = 0\.4 .*<= 0\.3"),
+])
+def test_bad_tapping_cases(changes, message):
+    with pytest.raises(ConfigError, match=message) as exc:
+        validate_case(tap_case(**changes), "case.yaml")
+    assert "\n" not in str(exc.value)
+
+
+def test_container_only_for_tapping():
+    case = copy.deepcopy(GOOD_CASE)
+    case["container"] = {"shape": "cylinder", "diameter": 20.0}
+    with pytest.raises(ConfigError, match=r"container is only used by protocol 'tapping', not "
+                                          r"'compress'; remove it"):
+        validate_case(case, "case.yaml")
