@@ -208,15 +208,22 @@ class FilledPackingFraction(Observable):
         return self
 
 
-def moving_average(values, window: int) -> np.ndarray:
-    """Centred running mean over ``window`` samples (odd), shorter at the ends: used to
-    average a packing fraction over one tap oscillation."""
+def period_average(values, samples_per_period: int) -> np.ndarray:
+    """Centred mean over exactly one period of a signal sampled ``samples_per_period``
+    (``f``) times per period: the kernel is ``f`` equal weights for odd ``f`` and, for even
+    ``f``, ``f - 1`` equal weights plus half weights at both ends (the trapezoid over one
+    period), so a signal periodic in the samples averages to a constant. Near the ends and
+    around NaN samples the kernel is renormalised over the finite samples it covers."""
     values = np.asarray(values, dtype=np.float64)
-    if window < 1 or window % 2 == 0:
-        raise ValueError(f"window must be an odd number >= 1, got {window}")
-    k = window // 2
-    c = np.concatenate([[0.0], np.cumsum(values)])
-    idx = np.arange(len(values))
-    lo = np.maximum(idx - k, 0)
-    hi = np.minimum(idx + k + 1, len(values))
-    return (c[hi] - c[lo]) / (hi - lo)
+    f = int(samples_per_period)
+    if f < 1:
+        raise ValueError(f"samples_per_period must be >= 1, got {samples_per_period}")
+    kernel = np.ones(f + 1 if f % 2 == 0 else f)
+    if f % 2 == 0:
+        kernel[[0, -1]] = 0.5
+    ok = np.isfinite(values)
+    centre = slice(len(kernel) // 2, len(kernel) // 2 + len(values))  # odd, symmetric kernel
+    num = np.convolve(np.where(ok, values, 0.0), kernel)[centre]
+    den = np.convolve(ok.astype(np.float64), kernel)[centre]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)

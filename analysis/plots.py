@@ -181,12 +181,14 @@ def tapping_curves(runs, out, phi_max=None, n_layers: int = 4, layer_label: str 
         ls = "-" if r["engine"] == "pysim" else ("--" if r["engine"] == "lammps" else ":")
         axes[0, 0].plot(x, cv.phi, color=color, lw=0.4, alpha=0.5, ls=ls)
         axes[0, 0].plot(x, cv.phi_avg, color=color, lw=1.4, ls=ls, label=r["label"])
-        axes[1, 0].plot(x, cv.angle, color=color, lw=1.2, ls=ls)
-        for k in range(n_layers):
-            if f"phi_layer{k + 1}" not in cv:
-                continue
-            axes[0, k + 1].plot(x, cv[f"phi_layer{k + 1}"], color=color, lw=1.0, ls=ls)
-            axes[1, k + 1].plot(x, cv[f"angle_layer{k + 1}"], color=color, lw=1.0, ls=ls)
+        for k in range(n_layers + 1):
+            suffix = "" if k == 0 else f"_layer{k}"
+            for row, q in enumerate(("phi", "angle")):
+                if f"{q}{suffix}" not in cv or (row == 0 and k == 0):
+                    continue
+                axes[row, k].plot(x, cv[f"{q}{suffix}"], color=color, lw=0.4, alpha=0.5, ls=ls)
+                if f"{q}{suffix}_avg" in cv:
+                    axes[row, k].plot(x, cv[f"{q}{suffix}_avg"], color=color, lw=1.4, ls=ls)
     axes[0, 0].set_title("filled part of the cylinder", fontsize=9)
     for k in range(n_layers):
         axes[0, k + 1].set_title(f"layer {k + 1} {layer_label}".strip(), fontsize=9)

@@ -183,9 +183,10 @@ def tap_curves(run: RunData, start_step: int, dt: float, period: float, amplitud
     one oscillation, the surface height ``top``, the mean angle between spines and the
     base ``angle`` (degrees), order with respect to gravity ``p2_z`` and, for each of
     ``n_layers`` layers of ``layer_thickness`` stacked on the base, ``phi_layer<k>`` and
-    ``angle_layer<k>`` (grains assigned to layers by centre)."""
+    ``angle_layer<k>`` (grains assigned to layers by centre); every density and angle
+    column also as ``<column>_avg``, its moving average over one oscillation."""
     from analysis.order import AngleToHorizontal
-    from analysis.packing import FilledPackingFraction, layer_edges, moving_average
+    from analysis.packing import FilledPackingFraction, layer_edges, period_average
     from analysis.packing import slab_packing_fraction
 
     area = np.pi * container_diameter**2 / 4
@@ -207,8 +208,10 @@ def tap_curves(run: RunData, start_step: int, dt: float, period: float, amplitud
             row[f"angle_layer{k + 1}"] = np.degrees(ang.layer_mean[k])
         rows.append(row)
     curves = pd.DataFrame(rows)
-    window = frames_per_tap if frames_per_tap % 2 else frames_per_tap + 1
-    curves["phi_avg"] = moving_average(curves.phi.to_numpy(), window) if len(curves) else []
+    for col in ["phi", "angle"] + [f"{q}_layer{k + 1}" for k in range(n_layers)
+                                   for q in ("phi", "angle")]:
+        curves[f"{col}_avg"] = (period_average(curves[col].to_numpy(), frames_per_tap)
+                                if len(curves) else [])
     return curves
 
 

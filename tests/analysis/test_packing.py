@@ -4,7 +4,7 @@ import pytest
 
 from analysis.frame import Frame
 from analysis.packing import (FilledPackingFraction, PackingProfile, cumulative_measure,
-                              layer_edges, moving_average, packing_fraction,
+                              layer_edges, period_average, packing_fraction,
                               slab_packing_fraction, surface_height)
 from tests.analysis.helpers import cubic, frame_of, random_unit, square
 
@@ -98,10 +98,19 @@ def test_two_dimensional_profile_of_a_disk_lattice():
     np.testing.assert_allclose(PackingProfile(thickness=0.5).compute(fr).phi, np.pi / 4)
 
 
-def test_moving_average_and_errors():
-    np.testing.assert_allclose(moving_average([1, 2, 3, 4, 5], 3), [1.5, 2, 3, 4, 4.5])
-    with pytest.raises(ValueError, match="odd"):
-        moving_average([1, 2], 2)
+def test_period_average_and_errors():
+    np.testing.assert_allclose(period_average([1, 2, 3, 4, 5], 3), [1.5, 2, 3, 4, 4.5])
+    # empty layers (NaN) are left out of the window, not spread over it
+    np.testing.assert_allclose(period_average([1, np.nan, 3, np.nan, np.nan, np.nan], 3),
+                               [1, 2, 3, 3, np.nan, np.nan])
+    np.testing.assert_allclose(period_average([2.0], 4), [2.0])  # shorter than a period
+    with pytest.raises(ValueError, match=">= 1"):
+        period_average([1, 2], 0)
+    # one period of any periodic signal averages to its mean, for even and odd sampling
+    for f in (3, 4):
+        sig = np.tile(np.random.default_rng(f).normal(size=f), 6)
+        np.testing.assert_allclose(period_average(sig, f)[f:-f], sig[:f].mean())
+    np.testing.assert_allclose(period_average([1.0, np.nan, 3.0, 5.0], 2), [1, 2, 11 / 3, 13 / 3])
     fr = frame_of([[0.5, 0.5, 0.5]], 0.5, [1.0, 1.0, 1.0])
     with pytest.raises(ValueError, match="strictly increasing"):
         slab_packing_fraction(fr, [1.0, 0.5])
