@@ -303,19 +303,28 @@ def latest_restart(work: Path) -> Path | None:
     """The newest complete restart file of an interrupted LAMMPS run in ``work``.
 
     LAMMPS writes ``restart.<step>`` in place, so a run killed while writing leaves the
-    newest file short; restart files of one run have nearly equal sizes, so the newest is
-    taken unless it is more than 10 % smaller than the one before (then that one is).
+    newest file short. File sizes say nothing (a restart holds the contact history, which
+    shrinks when a tapped packing is in flight), so each candidate, newest first, is read
+    back by LAMMPS itself (:func:`restart_is_complete`) and the first that reads is taken.
     """
     if not work.exists():
         return None
     files = sorted((p for p in work.glob("restart.*") if p.name.split(".")[-1].isdigit()),
                    key=lambda p: int(p.name.split(".")[-1]))
-    files = [p for p in files if p.stat().st_size > 0]
-    if not files:
-        return None
-    if len(files) >= 2 and files[-1].stat().st_size < 0.9 * files[-2].stat().st_size:
-        return files[-2]
-    return files[-1]
+    for path in reversed(files):
+        if path.stat().st_size > 0 and restart_is_complete(path):
+            return path
+    return None
+
+
+def restart_is_complete(path: Path) -> bool:
+    """Whether LAMMPS reads the restart file ``path`` to its end (in a child process: a
+    corrupt file may abort the reader)."""
+    code = ("import sys, lammps; l = lammps.lammps(cmdargs=['-log', 'none', '-screen', 'none']);"
+            "l.command('read_restart ' + sys.argv[1])")
+    r = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True,
+                       timeout=300)
+    return r.returncode == 0
 
 
 def cut_outputs(work: Path, step: int):
