@@ -24,7 +24,7 @@ def _contact_energy(case: dict, overlap: float, d: float) -> float:
     return 0.5 * c["k_n"] * overlap**2
 
 
-def check_run(run_dir, case: dict, max_overlap: float = MAX_OVERLAP) -> str | None:
+def check_run(run_dir, case: dict, max_overlap: float | None = None) -> str | None:
     """First sign of a blow-up in a run directory, or ``None``.
 
     * any non-finite value in ``thermo.dat`` (a container has no box packing fraction or
@@ -37,6 +37,8 @@ def check_run(run_dir, case: dict, max_overlap: float = MAX_OVERLAP) -> str | No
     from pathlib import Path
 
     run_dir = Path(run_dir)
+    if max_overlap is None:
+        max_overlap = float(case["contact"].get("max_overlap", MAX_OVERLAP))
     th = read_thermo(run_dir / "thermo.dat")
     cols = ["time", "phi", "pressure", "ke", "n_contacts"]
     if case["protocol"]["name"] == "tapping":

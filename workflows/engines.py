@@ -115,8 +115,13 @@ def tap_deck_vars(case: dict) -> dict[str, str]:
          "drag": settle_drag(case)[0], "settle_steps": tp.settle_steps,
          "relax_steps": tp.start - tp.settle_steps, "freq": 1.0 / tp.period,
          "amp": tp.amplitude, "taps": pr["taps"], "frames_per_tap": tp.frames_per_tap,
-         "thermo_every": case.get("output", {}).get("thermo_every", 1000),
-         "skin": 0.2 * case["particles"]["diameter"]["mean"], **_rod_vars(case)}
+         "thermo_every": case.get("output", {}).get("thermo_every", 1000), **_rod_vars(case)}
+    # a column landing after a tap throws single rods off fast: with the compression
+    # decks' 0.2 D skin, 1000 rods moved half the skin within a step (LAMMPS' 'dangerous
+    # builds'); 0.4 D covers twice that speed, and the ghost cutoff grows with it
+    d = case["particles"]["diameter"]["mean"]
+    v["skin"] = 0.4 * d
+    v["ghost_cut"] += 0.2 * d
     return {k: repr(float(x)) if isinstance(x, float) else str(x) for k, x in v.items()}
 
 

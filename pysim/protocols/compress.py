@@ -57,6 +57,12 @@ def model_from_case(case: dict) -> ContactModel:
                         gamma_rot=c.get("gamma_rot", gamma_bg * length**2 / 12.0))
 
 
+def max_overlap(case: dict) -> float:
+    """Blow-up limit of the case: overlap as a fraction of a diameter (``contact.max_overlap``,
+    0.25 when absent)."""
+    return float(case["contact"].get("max_overlap", 0.25))
+
+
 def state_from_init(case: dict, init: dict) -> State:
     """A :class:`State` in a periodic box from an initial configuration read by
     :func:`pysim.io.read_particle_data` (positions taken relative to the box origin)."""
@@ -78,7 +84,8 @@ def simulation_from_case(case: dict, init: dict) -> Simulation:
     """Build the :class:`Simulation` a compression case describes."""
     state = state_from_init(case, init)
     return Simulation(state, model_from_case(case), dt=case["protocol"]["dt"],
-                      skin=0.2 * 2.0 * float(np.max(state.radius)))
+                      skin=0.2 * 2.0 * float(np.max(state.radius)),
+                      max_overlap=max_overlap(case))
 
 
 def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = False,

@@ -30,7 +30,7 @@ import numpy as np
 from tqdm import tqdm
 
 from pysim import io
-from pysim.protocols.compress import model_from_case, state_from_init
+from pysim.protocols.compress import max_overlap, model_from_case, state_from_init
 from pysim.protocols.output import RunFiles
 from pysim.simulation import BlowUpError, Simulation
 
@@ -93,7 +93,8 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     else:
         state = state_from_init(case, init)
         sim = Simulation(state, model_from_case(case), dt=p["dt"],
-                         skin=0.2 * 2.0 * float(np.max(state.radius)), check_dt=False)
+                         skin=0.2 * 2.0 * float(np.max(state.radius)), check_dt=False,
+                         max_overlap=max_overlap(case))
         files.start()
         drv = {"phase": "compress", "lo": None, "hi": None, "bisections": 0}
     s = sim.state

@@ -34,7 +34,7 @@ import numpy as np
 from tqdm import tqdm
 
 from pysim import io, walls
-from pysim.protocols.compress import model_from_case
+from pysim.protocols.compress import max_overlap, model_from_case
 from pysim.protocols.output import RunFiles
 from pysim.simulation import BlowUpError, Simulation
 from pysim.state import State
@@ -120,7 +120,8 @@ def simulation_from_case(case: dict, init: dict) -> Simulation:
     base = walls.plane((0, 0, 1), (0.0, 0.0, -lo[2]))
     cyl = walls.cylinder(-lo[0], -lo[1], 0.5 * case["container"]["diameter"])
     return Simulation(state, model, dt=case["protocol"]["dt"], gravity=(0.0, 0.0, -case["gravity"]),
-                      planes=[base], cylinders=[cyl], skin=0.2 * 2.0 * float(np.max(state.radius)))
+                      planes=[base], cylinders=[cyl], skin=0.2 * 2.0 * float(np.max(state.radius)),
+                      max_overlap=max_overlap(case))
 
 
 def _set_stage(sim: Simulation, tp: TapPlan, drag: tuple[float, float]):

@@ -54,7 +54,7 @@ CASES = [
      "contact.friction = -0.1 is not allowed; use a number >= 0 and <= 10"),
     (("contact", "stiffness"), 5,
      "unknown key 'contact.stiffness'; allowed here: contact_time, friction, gamma_bg, gamma_n, "
-     "gamma_rot, gamma_t, k_n, k_t, law, restitution, wall_friction"),
+     "gamma_rot, gamma_t, k_n, k_t, law, max_overlap, restitution, wall_friction"),
     (("protocol", "name"), "shake",
      "protocol.name = 'shake' is not allowed; use one of 'compress', 'growth', 'jammed', 'tapping'"),
     (("protocol", "name"), DROP, "missing key 'protocol.name'"),
