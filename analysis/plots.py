@@ -283,3 +283,44 @@ def tapping_snapshots(frames, out, container_diameter: float, cut: float | None 
         cb = fig.colorbar(lc, ax=axes.ravel().tolist(), shrink=0.6)
         cb.set_label("angle to the base (deg)")
     _save(fig, out)
+
+
+def deposit_profiles(runs, out):
+    """Deposits: packing fraction, vertical stress ``sigma_vv`` and horizontal stress
+    ``sigma_hh`` (compressive positive, with the Janssen saturation fit of ``sigma_vv`` as
+    a thin line) versus the depth ``x = h / W``, and the distribution of the angle between
+    spines and the horizontal; one colour per variant, solid pysim, dashed LAMMPS.
+
+    ``runs``: dicts with ``label``, ``engine``, ``index`` (colour), ``profile``
+    (:func:`analysis.summary.analyse_deposit`) and ``angles`` (degrees, final frame).
+    """
+    fig, axes = plt.subplots(1, 4, figsize=(15, 4.2))
+    cmap = plt.get_cmap("tab10")
+    for r in runs:
+        pr = r["profile"]
+        color = cmap(r["index"] % 10)
+        ls = "-" if r["engine"] == "pysim" else ("--" if r["engine"] == "lammps" else ":")
+        axes[0].plot(pr.phi, pr.x, color=color, ls=ls, marker=".", label=r["label"])
+        axes[1].plot(pr.sigma_vv, pr.x, color=color, ls=ls, marker=".")
+        if "sigma_vv_fit" in pr and np.isfinite(pr.sigma_vv_fit).any():
+            axes[1].plot(pr.sigma_vv_fit, pr.x, color=color, ls=ls, lw=0.6, alpha=0.7)
+        axes[2].plot(pr.sigma_hh, pr.x, color=color, ls=ls, marker=".")
+        axes[3].hist(r["angles"], bins=18, range=(0, 90), density=True, histtype="step",
+                     color=color, ls=ls)
+    for ax, label in zip(axes[:3], [r"packing fraction $\phi$", r"vertical stress $\sigma_{vv}$",
+                                    r"horizontal stress $\sigma_{hh}$"]):
+        ax.set_xlabel(label)
+        ax.set_ylabel("depth  x = h / W")
+        ax.invert_yaxis()
+    axes[1].set_title("thin: Janssen fit", fontsize=8)
+    axes[3].set_xlabel("angle between spine and horizontal (deg)")
+    axes[3].set_title("final frame", fontsize=8)
+    axes[3].set_ylabel("probability density")
+    beta = np.linspace(0, 90, 91)
+    axes[3].plot(beta, np.cos(np.radians(beta)) * np.pi / 180, color="grey", lw=0.8, ls=":",
+                 label="isotropic (3-D)")
+    axes[3].legend(fontsize=6)
+    axes[0].legend(fontsize=6)
+    fig.suptitle("deposits: profiles versus depth (solid pysim, dashed LAMMPS)", fontsize=9)
+    fig.tight_layout()
+    _save(fig, out)

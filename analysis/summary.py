@@ -242,3 +242,77 @@ def analyse_tapping(run_dir, **plan):
         rows.append((f"angle_tapped_layer{k}", float(last_tap[f"angle_layer{k}"].mean()), np.nan))
         k += 1
     return rows, curves, run.thermo
+
+
+def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density: float = 1.0,
+                    base_wall_id: int | None = None):
+    """Observables of a settled deposit in a box of ``width`` ``W`` (the last frame):
+
+    * ``phi_deposit``: packing fraction of the filled part (grain measure below the top
+      surface over ``W^(d-1)`` times the height);
+    * ``angle_mean`` (degrees) and ``flat_fraction`` (spines within 15 degrees of the
+      horizontal);
+    * Janssen saturation fits ``sigma(x) = sigma_m (1 - exp(-x / h_s))``, ``x = depth /
+      W``, of the vertical stress and of the pressure in slabs of thickness ``slab``
+      (compressive positive; fits over slabs with at least 3 grains, not the loose top
+      slab): ``sigma_m_vv``, ``h_s_vv`` with standard errors as uncertainties,
+      ``chi2_dof_vv``, and ``sigma_m_p``, ``h_s_p``;
+    * ``k_ratio``: ``sigma_hh / sigma_vv`` averaged over the lower half of the deposit;
+    * ``apparent_mass_fraction``: vertical force on the base over the deposit's weight
+      (1 without wall friction; Janssen: below 1; grain ``density`` per volume, per area
+      in 2-D), when ``base_wall_id`` names the base's rows in the contact table.
+
+    Returns ``(rows, profile)``: rows ``(observable, value, uncertainty)`` and a table of
+    the slab profile (``depth``, ``x``, ``phi``, ``sigma_vv``, ``sigma_hh``, ``pressure``,
+    ``count`` and the fitted curves).
+    """
+    from analysis.janssen import JanssenFit, JanssenFitError, janssen
+    from analysis.order import AngleToHorizontal
+    from analysis.packing import FilledPackingFraction, slab_packing_fraction
+    from analysis.stress import StressProfile
+
+    run = RunData(run_dir)
+    frames = run.frames()
+    if not frames:
+        raise ValueError(f"{run_dir}: no frames in particles.dump")
+    frame, contacts = frames[-1]
+    d, v = frame.dim, frame.vertical
+    area = width ** (d - 1)
+    fill = FilledPackingFraction(bottom=0.0, area=area).compute(frame)
+    ang = AngleToHorizontal().compute(frame)
+    k = max(int(np.floor(fill.top / slab)), 1)
+    edges = slab * np.arange(k + 1)
+    sp = StressProfile(edges=edges, top=fill.top).compute(frame, contacts)
+    phi_slab = slab_packing_fraction(frame, edges, area=area)
+    prof = pd.DataFrame({"depth": sp.depth, "x": sp.depth / width, "phi": phi_slab,
+                         "sigma_vv": -sp.sigma_vv, "sigma_hh": -sp.sigma_hh,
+                         "pressure": sp.pressure, "count": sp.count})
+    use = (prof["count"] >= 3) & (prof["depth"] > 0.5 * slab)
+    rows = [("phi_deposit", float(fill.phi), np.nan),
+            ("height", float(fill.height), np.nan),
+            ("angle_mean", float(ang.mean_deg), np.nan),
+            ("flat_fraction", float(np.mean(ang.angles < np.radians(15.0))), np.nan)]
+    for col, tag in (("sigma_vv", "vv"), ("pressure", "p")):
+        try:
+            fit = JanssenFit(form="saturation", width=width).compute(
+                prof.loc[use, "depth"], prof.loc[use, col])
+        except (JanssenFitError, RuntimeError):
+            rows += [(f"sigma_m_{tag}", np.nan, np.nan), (f"h_s_{tag}", np.nan, np.nan)]
+            prof[f"{col}_fit"] = np.nan
+            continue
+        rows += [(f"sigma_m_{tag}", float(fit.sigma_m), float(fit.sigma_m_err)),
+                 (f"h_s_{tag}", float(fit.h_s), float(fit.h_s_err))]
+        if tag == "vv":
+            rows.append(("chi2_dof_vv", float(fit.chi2 / max(fit.dof, 1)), np.nan))
+        prof[f"{col}_fit"] = janssen(prof["x"].clip(lower=0.0), fit.sigma_m, fit.h_s)
+    lower = use & (prof["depth"] > 0.5 * fill.height)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        kr = (prof.loc[lower, "sigma_hh"] / prof.loc[lower, "sigma_vv"]).to_numpy()
+    rows.append(("k_ratio", float(np.nanmean(kr)) if np.isfinite(kr).any() else np.nan, np.nan))
+    if base_wall_id is not None:
+        on_base = contacts.j == base_wall_id
+        f_up = float(np.sum(contacts.force[on_base, v]))  # force on the grains from the base
+        weight = density * float(np.sum(frame.particle_measures())) * gravity
+        ok = on_base.any() and weight > 0  # tables without wall rows (LAMMPS) say nothing
+        rows.append(("apparent_mass_fraction", f_up / weight if ok else np.nan, np.nan))
+    return rows, prof

@@ -53,7 +53,7 @@ def _run(case, args) -> int:
 
     import pysim
     from pysim import io
-    from pysim.protocols import compress, growth, jammed, tapping
+    from pysim.protocols import compress, deposit, growth, jammed, tapping
     from pysim.protocols.output import ResumeError
     from pysim.simulation import BlowUpError
     from workflows import provenance
@@ -68,7 +68,7 @@ def _run(case, args) -> int:
               f"particles.n = {case['particles']['n']}", file=sys.stderr)
         return 2
     driver = {"compress": compress, "growth": growth, "jammed": jammed,
-              "tapping": tapping}[case["protocol"]["name"]]
+              "tapping": tapping, "deposit": deposit}[case["protocol"]["name"]]
     try:
         summary = driver.run(case, init, args.out, progress=not args.no_progress,
                              resume=args.resume, checkpoint_every=args.checkpoint_every)

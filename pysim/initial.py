@@ -214,13 +214,15 @@ def random_spherocylinders(radius, length, phi: float, seed: int, dimension: int
 
 
 @njit
-def _rsa_rods_cylinder(radius, half, rc, height, seed, max_attempts):
-    """RSA of spherocylinders inside a vertical cylinder of radius ``rc`` (axis at
-    ``x = y = 0``) between ``z = 0`` and ``height``: every spine end lies at least ``R``
-    inside the wall and between the floor and the top. Brute-force overlap tests against
-    the grains of neighbouring height bands."""
+def _rsa_rods_walled(radius, half, shape, size, height, dim, seed, max_attempts):
+    """RSA of spherocylinders inside a container standing on the floor (height 0 along
+    the vertical axis ``v = dim - 1``) up to ``height``: ``shape`` 0 a cylinder of radius
+    ``size`` with its axis at ``x = y = 0`` (3-D), 1 a box ``0 < x (, y) < size``. Every
+    spine end lies at least ``R`` inside the walls, above the floor and below the top.
+    Brute-force overlap tests against the grains of neighbouring height bands."""
     np.random.seed(seed)
     n = radius.shape[0]
+    v = dim - 1
     reach = radius[0] + half[0]
     band = 2.0 * reach
     nb = max(int(height // band), 1)
@@ -230,30 +232,38 @@ def _rsa_rods_cylinder(radius, half, rc, height, seed, max_attempts):
     u = np.zeros((n, 3))
     p = np.zeros(3)
     a = np.zeros(3)
+    e = np.zeros(3)
     for i in range(n):
         placed = False
         for _ in range(max_attempts):
-            rho = (rc - radius[i]) * np.sqrt(np.random.random())
-            th = 2.0 * np.pi * np.random.random()
-            p[0] = rho * np.cos(th)
-            p[1] = rho * np.sin(th)
-            p[2] = radius[i] + np.random.random() * (height - 2.0 * radius[i])
+            if shape == 0:
+                rho = (size - radius[i]) * np.sqrt(np.random.random())
+                th = 2.0 * np.pi * np.random.random()
+                p[0] = rho * np.cos(th)
+                p[1] = rho * np.sin(th)
+            else:
+                for k in range(v):
+                    p[k] = radius[i] + np.random.random() * (size - 2.0 * radius[i])
+            p[v] = radius[i] + np.random.random() * (height - 2.0 * radius[i])
             for k in range(3):
-                a[k] = np.random.normal()
+                a[k] = np.random.normal() if k < dim else 0.0
             an = np.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
             ok = True
             for k in range(3):
                 a[k] /= an
             for sg in (-1.0, 1.0):
-                e0 = p[0] + sg * half[i] * a[0]
-                e1 = p[1] + sg * half[i] * a[1]
-                e2 = p[2] + sg * half[i] * a[2]
-                if e0 * e0 + e1 * e1 > (rc - radius[i]) ** 2 or e2 < radius[i] \
-                        or e2 > height - radius[i]:
+                for k in range(3):
+                    e[k] = p[k] + sg * half[i] * a[k]
+                if e[v] < radius[i] or e[v] > height - radius[i]:
                     ok = False
+                if shape == 0 and e[0] * e[0] + e[1] * e[1] > (size - radius[i]) ** 2:
+                    ok = False
+                for k in range(v if shape == 1 else 0):
+                    if e[k] < radius[i] or e[k] > size - radius[i]:
+                        ok = False
             if not ok:
                 continue
-            b = min(int(p[2] / band), nb - 1)
+            b = min(int(p[v] / band), nb - 1)
             for bb in range(max(b - 1, 0), min(b + 2, nb)):
                 if not ok:
                     break
@@ -311,11 +321,42 @@ def random_spherocylinders_in_cylinder(radius, length, phi: float, diameter_c: f
                          f"{2 * radius[0] + length[0]:.4g}")
     height = float(volume(radius, length).sum() / (phi * np.pi * rc * rc))
     height = max(height, 2.0 * (radius[0] + length[0] / 2))
-    x, u, placed = _rsa_rods_cylinder(radius, length / 2, rc, height, int(seed) % (2**32),
-                                      int(max_attempts))
+    x, u, placed = _rsa_rods_walled(radius, length / 2, 0, rc, height, 3, int(seed) % (2**32),
+                                    int(max_attempts))
     if placed < len(radius):
         raise RuntimeError(f"random insertion placed only {placed} of {len(radius)} "
                            f"spherocylinders in the cylinder at phi = {phi}; lower phi_init")
+    return x, u, radius, length, height
+
+
+def random_spherocylinders_in_box(radius, length, phi: float, width: float, seed: int,
+                                  dimension: int = 3, max_attempts: int = 1_000_000):
+    """Random non-overlapping spherocylinders (isotropic orientations) in a box
+    ``0 < x (, y) < width`` above a floor at height 0 along the last axis (``z``; ``y`` in
+    2-D), filled to the height ``H`` at which the grains occupy a fraction ``phi`` of the
+    box: ``H = sum V_i / (phi W^(d-1))``. Random sequential addition.
+
+    Returns ``(x, u, radius, length, height)`` in insertion order (decreasing reach).
+    """
+    from pysim.state import area, volume
+
+    radius = np.asarray(radius, dtype=np.float64)
+    length = np.broadcast_to(np.asarray(length, dtype=np.float64), radius.shape)
+    order = np.argsort(-(radius + length / 2), kind="stable")
+    radius, length = radius[order].copy(), length[order].copy()
+    if not 0 < phi < 1:
+        raise ValueError(f"packing fraction must be in (0, 1), got {phi}")
+    if not width > 2 * radius[0] + length[0]:
+        raise ValueError(f"box width {width:.4g} is too narrow for grains of length "
+                         f"{2 * radius[0] + length[0]:.4g}")
+    measure = area(radius, length) if dimension == 2 else volume(radius, length)
+    height = float(measure.sum() / (phi * width ** (dimension - 1)))
+    height = max(height, 2.0 * (radius[0] + length[0] / 2))
+    x, u, placed = _rsa_rods_walled(radius, length / 2, 1, float(width), height, dimension,
+                                    int(seed) % (2**32), int(max_attempts))
+    if placed < len(radius):
+        raise RuntimeError(f"random insertion placed only {placed} of {len(radius)} "
+                           f"spherocylinders in the box at phi = {phi}; lower phi_init")
     return x, u, radius, length, height
 
 
@@ -368,6 +409,23 @@ def write_initial(case: dict, path) -> None:
     dim = p.get("dimension", 3)
     alpha = p.get("aspect_ratio", 0.0)
     title = f"rodpack random start, seed {seed}, phi {phi}"
+    if case.get("container", {}).get("shape") == "box":
+        w = case["container"]["width"]
+        x, u, r, length, height = random_spherocylinders_in_box(d / 2.0, alpha * d, phi, w, seed,
+                                                                 dimension=dim)
+        # random velocities of rms speed v_init (isotropic in the d dimensions)
+        v = rng.normal(size=(len(r), 3)) * case["protocol"].get("v_init", 0.0) / np.sqrt(dim)
+        if dim == 2:
+            v[:, 2] = 0.0
+        margin = float(np.max(2 * r + length))
+        lo = np.array([-margin, -margin, -margin])
+        hi = np.array([w + margin, w + margin, height + margin])
+        if dim == 2:
+            lo[1], hi[1] = -margin, height + margin
+            lo[2], hi[2] = -0.5, 0.5
+        write_rod_data(path, x, u, r, length, hi - lo, p.get("density", 1.0), dimension=dim,
+                       title=title + f" in a box of width {w:g}", box_lo=lo, v=v)
+        return
     if "container" in case:
         dc = case["container"]["diameter"]
         x, u, r, length, height = random_spherocylinders_in_cylinder(d / 2.0, alpha * d, phi, dc,

@@ -162,7 +162,7 @@ def read_sphere_data(path):
 
 
 def write_rod_data(path, x, axis, radius, length, box, density, dimension=3,
-                   title="rodpack initial configuration", box_lo=(0.0, 0.0, 0.0)):
+                   title="rodpack initial configuration", box_lo=(0.0, 0.0, 0.0), v=None):
     """Write spherocylinders as a LAMMPS data file for ``atom_style ellipsoid``.
 
     Each rod is an atom with an ``Ellipsoids`` entry ``id D D L+D qw qx qy qz``: the long
@@ -170,7 +170,8 @@ def write_rod_data(path, x, axis, radius, length, box, density, dimension=3,
     convention), so LAMMPS, OVITO and pysim read the same orientations. The atom
     ``density`` column holds the material density (engines derive masses from their own
     representation of the rod). 2-D files have ``z = 0`` and ``zlo zhi = -0.5 0.5``; the
-    box spans ``box_lo`` to ``box_lo + box``.
+    box spans ``box_lo`` to ``box_lo + box``. ``v`` (N, 3), when given, is written as a
+    ``Velocities`` section (``id vx vy vz lx ly lz``, no angular momentum).
     """
     from pysim.rotation import quaternions_from_axes
 
@@ -191,6 +192,10 @@ def write_rod_data(path, x, axis, radius, length, box, density, dimension=3,
     lines += ["", "Ellipsoids", ""]
     lines += [f"{i + 1} {2 * radius[i]:.16g} {2 * radius[i]:.16g} {length[i] + 2 * radius[i]:.16g} "
               f"{q[i, 0]:.16g} {q[i, 1]:.16g} {q[i, 2]:.16g} {q[i, 3]:.16g}" for i in range(n)]
+    if v is not None:
+        v = np.asarray(v, dtype=np.float64)
+        lines += ["", "Velocities", ""]
+        lines += [f"{i + 1} {v[i, 0]:.16g} {v[i, 1]:.16g} {v[i, 2]:.16g} 0 0 0" for i in range(n)]
     atomic_write_text(path, "\n".join(lines) + "\n")
 
 
@@ -234,7 +239,8 @@ def read_particle_data(path) -> dict:
     :func:`write_rod_data` (spherocylinders).
 
     Returns a dict of arrays sorted by id: ``ids``, ``x`` (N, 3), ``radius``, ``length``,
-    ``axis`` (N, 3), ``density`` (N,), and ``box_lo``, ``box`` (3,).
+    ``axis`` (N, 3), ``density`` (N,), ``v`` (N, 3; zero without a ``Velocities``
+    section), and ``box_lo``, ``box`` (3,).
     """
     from pysim.rotation import axes
 
@@ -247,6 +253,13 @@ def read_particle_data(path) -> dict:
     hi = np.array([header[f"{a}lo {a}hi"][1] for a in "xyz"])
     atoms = atoms[np.argsort(atoms[:, 0])]
     ids = atoms[:, 0].astype(np.int64)
+    v = np.zeros((n, 3))
+    if "Velocities" in sections:
+        vel = np.array(sections["Velocities"])
+        vel = vel[np.argsort(vel[:, 0])]
+        if len(vel) != n or not np.array_equal(vel[:, 0].astype(np.int64), ids):
+            raise ValueError(f"{path}: the Velocities section must list every atom once")
+        v = vel[:, 1:4].copy()
     if "Ellipsoids" in sections:
         ell = np.array(sections["Ellipsoids"])
         ell = ell[np.argsort(ell[:, 0])]
@@ -259,7 +272,7 @@ def read_particle_data(path) -> dict:
         u = np.empty((n, 3))
         axes(q, u)
         return {"ids": ids, "x": atoms[:, 4:7].copy(), "radius": radius, "length": length,
-                "axis": u, "density": atoms[:, 3].copy(), "box_lo": lo, "box": hi - lo}
+                "axis": u, "density": atoms[:, 3].copy(), "box_lo": lo, "box": hi - lo, "v": v}
     return {"ids": ids, "x": atoms[:, 4:7].copy(), "radius": atoms[:, 2] / 2.0,
             "length": np.zeros(n), "axis": np.tile([0.0, 0.0, 1.0], (n, 1)),
-            "density": atoms[:, 3].copy(), "box_lo": lo, "box": hi - lo}
+            "density": atoms[:, 3].copy(), "box_lo": lo, "box": hi - lo, "v": v}

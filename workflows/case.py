@@ -344,12 +344,23 @@ def _derive_contact(case: dict, source: str, at: str):
 
 
 def _check_container(case: dict, source: str, at: str):
-    """Container cases: a tapping protocol needs a container and gravity; the cylinder
-    must be wider than the longest grain."""
+    """Container cases: tapping needs a 3-D cylinder, deposition a box, both gravity; the
+    container must be wider than the longest grain; cohesion by a Bond number needs
+    gravity."""
     pr = case["protocol"]
     p = case["particles"]
     cont = case.get("container")
-    if pr["name"] == "tapping":
+    if case["contact"].get("bond_number", 0.0) > 0 and not case["gravity"] > 0:
+        raise ConfigError(f"{source}: {at}contact.bond_number = {case['contact']['bond_number']} "
+                          f"needs gravity > 0 (F_c = Bo_g m g), not {case['gravity']}")
+    if pr["name"] == "deposit":
+        if cont is None or cont["shape"] != "box":
+            raise ConfigError(f"{source}: {at}protocol 'deposit' needs container: "
+                              "{shape: box, width: ...}")
+        if not case["gravity"] > 0:
+            raise ConfigError(f"{source}: {at}gravity = {case['gravity']} must be > 0 for "
+                              "protocol 'deposit'")
+    elif pr["name"] == "tapping":
         if cont is None:
             raise ConfigError(f"{source}: {at}container is required by protocol 'tapping' "
                               "(e.g. container: {shape: cylinder, diameter: 8.0e-3})")
@@ -359,17 +370,28 @@ def _check_container(case: dict, source: str, at: str):
         if p["dimension"] != 3:
             raise ConfigError(f"{source}: {at}particles.dimension = {p['dimension']}: protocol "
                               "'tapping' is 3-D (a cylinder); use 3")
+        if cont["shape"] != "cylinder":
+            raise ConfigError(f"{source}: {at}container.shape = {cont['shape']!r}: protocol "
+                              "'tapping' runs in a cylinder; use 'cylinder'")
     elif cont is not None:
-        raise ConfigError(f"{source}: {at}container is only used by protocol 'tapping', not "
-                          f"{pr['name']!r}; remove it")
+        raise ConfigError(f"{source}: {at}container is only used by protocols 'tapping' and "
+                          f"'deposit', not {pr['name']!r}; remove it")
     if cont is None:
         return
+    key = "diameter" if cont["shape"] == "cylinder" else "width"
+    other = "width" if key == "diameter" else "diameter"
+    if key not in cont:
+        raise ConfigError(f"{source}: {at}container.{key} is required for shape "
+                          f"{cont['shape']!r}")
+    if other in cont:
+        raise ConfigError(f"{source}: {at}container.{other} is not used by shape "
+                          f"{cont['shape']!r} (it takes {key}); remove it")
     dmax = size_extremes(p["diameter"])[2]
     longest = dmax * (1.0 + p["aspect_ratio"])
-    if cont["diameter"] <= 1.5 * longest:
+    if cont[key] <= 1.5 * longest:
         raise ConfigError(
-            f"{source}: {at}container.diameter = {cont['diameter']} must exceed 1.5 times the "
-            f"longest grain (L + D = {longest:.4g}); use a wider cylinder")
+            f"{source}: {at}container.{key} = {cont[key]} must exceed 1.5 times the "
+            f"longest grain (L + D = {longest:.4g}); use a wider container")
 
 
 def load_case(path) -> dict:

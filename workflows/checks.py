@@ -28,7 +28,7 @@ def check_run(run_dir, case: dict, max_overlap: float | None = None) -> str | No
     """First sign of a blow-up in a run directory, or ``None``.
 
     * any non-finite value in ``thermo.dat`` (a container has no box packing fraction or
-      pressure: for 'tapping' only time, ke and n_contacts are checked);
+      pressure: in a container only time, ke and n_contacts are checked);
     * kinetic energy per particle above the elastic energy of one contact overlapping by
       ``max_overlap`` diameters (a packing never stores that much motion);
     * any contact in ``contacts.dump`` overlapping by more than ``max_overlap`` mean
@@ -41,7 +41,7 @@ def check_run(run_dir, case: dict, max_overlap: float | None = None) -> str | No
         max_overlap = float(case["contact"].get("max_overlap", MAX_OVERLAP))
     th = read_thermo(run_dir / "thermo.dat")
     cols = ["time", "phi", "pressure", "ke", "n_contacts"]
-    if case["protocol"]["name"] == "tapping":
+    if "container" in case:  # tapping, deposit: no box packing fraction or pressure
         cols = ["time", "ke", "n_contacts"]
     values = (th[cols].apply(lambda c: c.astype(np.float64)).to_numpy() if len(th)
               else np.zeros((0, len(cols))))

@@ -54,8 +54,15 @@ def supports(engine: str, case: dict) -> str | None:
         if k != "rods":
             return f"the {engine} tapping deck is for rods (aspect_ratio > 0)"
         return None
+    if name == "deposit":
+        if engine == "liggghts":
+            return "no LIGGGHTS deposition deck yet"
+        if k != "rods":
+            return f"the {engine} deposition deck is for 3-D rods (aspect_ratio > 0, dimension 3)"
+        return None
     if name != "compress":
-        return f"{engine} runs only the 'compress' and 'tapping' protocols here, not '{name}'"
+        return (f"{engine} runs only the 'compress', 'tapping' and 'deposit' protocols here, "
+                f"not '{name}'")
     if case["protocol"].get("integrator", "verlet") != "verlet":
         return f"{engine} integrates inertial dynamics only (no overdamped integrator)"
     if k == "2d":
@@ -77,7 +84,7 @@ def deck(engine: str, case: dict) -> Path:
 
 
 #: deck file suffix of each protocol the peer engines run
-DECK_SUFFIX = {"compress": "compress", "tapping": "tap"}
+DECK_SUFFIX = {"compress": "compress", "tapping": "tap", "deposit": "deposit"}
 
 
 def glued_spheres(length: float, diameter: float, spacing: float) -> int:
@@ -125,21 +132,65 @@ def tap_deck_vars(case: dict) -> dict[str, str]:
     return {k: repr(float(x)) if isinstance(x, float) else str(x) for k, x in v.items()}
 
 
+def deposit_deck_vars(case: dict) -> dict[str, str]:
+    """``-var`` values of the deposition deck (``in.rods.deposit``): pysim's Hertz
+    stiffness (the deck converts it to LAMMPS' ``k_N = k_n / sqrt(R_eff)``), the cohesive
+    force ``F_c = Bo_g m g`` per sphere pair within ``d_c``, and the settling test of
+    :mod:`pysim.protocols.deposit` at every ``thermo.dat`` row."""
+    from pysim.protocols.deposit import cohesion
+
+    c, pr = case["contact"], case["protocol"]
+    out = case.get("output", {})
+    gamma_n = c.get("gamma_n", 0.0)
+    f_c, d_c = cohesion(case)
+    every = out.get("thermo_every", 1000)
+    dt = pr["dt"]
+    d = case["particles"]["diameter"]["mean"]
+    v = {"width": case["container"]["width"], "k_n": c["k_n"], "gamma_n": gamma_n,
+         "k_t": c.get("k_t", 0.0),
+         "x_gamma_t": c.get("gamma_t", 0.0) / gamma_n if gamma_n > 0 else 0.0,
+         "mu": c.get("friction", 0.0), "mu_wall": c.get("wall_friction", c.get("friction", 0.0)),
+         "f_coh": f_c, "d_coh": d_c, "g": case["gravity"], "dt": dt,
+         "check_every": every, "thermo_every": every,
+         "min_steps": int(np.ceil(pr.get("min_time", 0.0) / dt)),
+         "max_steps": int(np.ceil(pr["max_time"] / dt)),
+         "settle_ratio": pr.get("ke_ratio", 1e-6), "dump_every": out.get("dump_every", 4000),
+         "skin": 0.2 * d, **_rod_vars(case)}
+    if case["particles"]["diameter"].get("distribution", "mono") != "mono":
+        raise EngineError("the LAMMPS deposition deck needs equal spheres (mono diameters)")
+    return {k: repr(float(x)) if isinstance(x, float) else str(x) for k, x in v.items()}
+
+
+def _ke_peak(screen: Path, step: int) -> float:
+    """Running peak of the kinetic energy printed by the deposition deck at its last
+    check at or before ``step`` (``rodpack: step S ke K peak P``); 0 when none."""
+    peak = 0.0
+    if screen.exists():
+        for m in re.finditer(r"rodpack: step (\d+) ke \S+ peak (\S+)", screen.read_text()):
+            if int(m.group(1)) <= step:
+                peak = float(m.group(2))
+    return peak
+
+
 def restart_interval(case: dict) -> int:
     """Steps between LAMMPS restart files: every :data:`RESTART_DUMPS` dump intervals
-    (tapping: frame intervals)."""
+    (tapping: frame intervals; deposition: thermo rows)."""
     if case["protocol"]["name"] == "tapping":
         from pysim.protocols.tapping import plan
 
         tp = plan(case["protocol"], case["gravity"])
         return RESTART_DUMPS * max(int(np.diff(tp.frame_steps).max()), 1)
+    if case["protocol"]["name"] == "deposit":  # few frames: every 10 settling checks
+        return RESTART_DUMPS * case.get("output", {}).get("thermo_every", 1000)
     return RESTART_DUMPS * case.get("output", {}).get("dump_every", 4000)
 
 
 def deck_vars(case: dict, engine: str) -> dict[str, str]:
-    """``-var`` values of the case's deck (compression or tapping)."""
+    """``-var`` values of the case's deck (compression, tapping or deposition)."""
     if case["protocol"]["name"] == "tapping":
         return tap_deck_vars(case)
+    if case["protocol"]["name"] == "deposit":
+        return deposit_deck_vars(case)
     c, pr = case["contact"], case["protocol"]
     out = case.get("output", {})
     v = {
@@ -238,6 +289,8 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
         cut_outputs(work, step)
         extra["restart_file"] = str(restart.resolve())
         extra["resume"] = 1
+        if case["protocol"]["name"] == "deposit":
+            extra["ke_peak"] = repr(_ke_peak(work / "screen.txt", step))
     else:
         if work.exists():
             shutil.rmtree(work)
@@ -293,7 +346,10 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
         old.unlink()
     steps = _last_step(outdir / "thermo.dat")
     n = _count_atoms(outdir / "particles.dump")
-    return {"engine_version": engine_version(engine, text), "command": cmd, "ranks": ranks,
+    settled = {}
+    if case["protocol"]["name"] == "deposit":
+        settled = {"settled": "rodpack: settled at step" in text}
+    return {**settled, "engine_version": engine_version(engine, text), "command": cmd, "ranks": ranks,
             "wall_seconds": wall, "steps": steps,
             "particle_steps_per_second": n * steps / wall if wall > 0 else float("nan"),
             "contacts_dropped": stats["dropped"], "status": "ok",
@@ -375,7 +431,7 @@ def write_glued_data(init_path, out_path, case: dict) -> float:
     d = read_particle_data(init_path)
     spacing = case["particles"].get("glued_spacing", 0.25)
     rho = case["particles"].get("density", 1.0)
-    rows, mols = [], []
+    rows, mols, vels = [], [], []
     vtot = 0.0
     k = 0
     for i in range(len(d["ids"])):
@@ -391,11 +447,15 @@ def write_glued_data(init_path, out_path, case: dict) -> float:
             p = d["x"][i] + sk * d["axis"][i]
             rows.append(f"{k} 1 {dia:.16g} {dens:.16g} {p[0]:.16g} {p[1]:.16g} {p[2]:.16g}")
             mols.append(f"{k} {d['ids'][i]}")
+            vi = d["v"][i]
+            vels.append(f"{k} {vi[0]:.16g} {vi[1]:.16g} {vi[2]:.16g} 0 0 0")
     lo, hi = d["box_lo"], d["box_lo"] + d["box"]
     head = [f"# rodpack glued-sphere rods ({len(d['ids'])} rods, spacing <= {spacing} D)", "",
             f"{k} atoms", "1 atom types", ""]
     head += [f"{lo[a]:.16g} {hi[a]:.16g} {ax}lo {ax}hi" for a, ax in enumerate("xyz")]
     text = "\n".join(head + ["", "Atoms # sphere", ""] + rows + ["", "Molecules", ""] + mols)
+    if np.any(d["v"] != 0.0):  # every sphere moves with its rod (no initial spin)
+        text += "\n\nVelocities\n\n" + "\n".join(vels)
     atomic_write_text(out_path, text + "\n")
     return vtot
 

@@ -53,10 +53,12 @@ CASES = [
     (("contact", "friction"), -0.1,
      "contact.friction = -0.1 is not allowed; use a number >= 0 and <= 10"),
     (("contact", "stiffness"), 5,
-     "unknown key 'contact.stiffness'; allowed here: contact_time, friction, gamma_bg, gamma_n, "
+     "unknown key 'contact.stiffness'; allowed here: bond_number, cohesion_range, contact_time, "
+     "friction, gamma_bg, gamma_n, "
      "gamma_rot, gamma_t, k_n, k_t, law, max_overlap, restitution, wall_friction"),
     (("protocol", "name"), "shake",
-     "protocol.name = 'shake' is not allowed; use one of 'compress', 'growth', 'jammed', 'tapping'"),
+     "protocol.name = 'shake' is not allowed; use one of 'compress', 'growth', 'jammed', 'tapping', "
+     "'deposit'"),
     (("protocol", "name"), DROP, "missing key 'protocol.name'"),
     (("protocol", "phi_init"), 0.5, "protocol.phi_init = 0.5 cannot be reached by random "
                                     "insertion in 3-D; use a value <= 0.35 and compress"),

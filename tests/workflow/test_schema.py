@@ -124,8 +124,10 @@ def tap_case(**changes):
     ({"particles__dimension": 2}, r"particles\.dimension = 2: protocol 'tapping' is 3-D"),
     ({"container__diameter": 2e-3}, r"container\.diameter = 0\.002 must exceed 1\.5 times the "
                                     r"longest grain \(L \+ D = 0\.001569\)"),
-    ({"container__shape": "box"}, r"container\.shape = 'box' is not allowed; use one of "
-                                  r"'cylinder'"),
+    ({"container__shape": "box"}, r"container\.shape = 'box': protocol 'tapping' runs in a "
+                                  r"cylinder; use 'cylinder'"),
+    ({"container__shape": "cone"}, r"container\.shape = 'cone' is not allowed; use one of "
+                                   r"'cylinder', 'box'"),
     ({"contact__contact_time": KeyError}, r"restitution and contact_time go together"),
     ({"contact__restitution": 1.5}, r"contact\.restitution = 1\.5 .*<= 1"),
     ({"contact__law": "hertz"}, r"contact\.restitution needs law: hooke, not 'hertz'"),
@@ -143,6 +145,55 @@ def test_bad_tapping_cases(changes, message):
 def test_container_only_for_tapping():
     case = copy.deepcopy(GOOD_CASE)
     case["container"] = {"shape": "cylinder", "diameter": 20.0}
-    with pytest.raises(ConfigError, match=r"container is only used by protocol 'tapping', not "
-                                          r"'compress'; remove it"):
+    with pytest.raises(ConfigError, match=r"container is only used by protocols 'tapping' and "
+                                          r"'deposit', not 'compress'; remove it"):
         validate_case(case, "case.yaml")
+
+
+def dep_case(**changes):
+    from tests.pysim.test_deposit import with_
+
+    case = with_()
+    for path, value in changes.items():
+        *head, last = path.split("__")
+        d = case
+        for k in head:
+            d = d[k]
+        if value is KeyError:
+            del d[last]
+        else:
+            d[last] = value
+    return case
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"container": KeyError}, r"protocol 'deposit' needs container: \{shape: box, width: \.\.\.\}"),
+    ({"container": {"shape": "cylinder", "diameter": 6.0}},
+     r"protocol 'deposit' needs container: \{shape: box"),
+    ({"container__diameter": 6.0}, r"container\.diameter is not used by shape 'box' \(it takes "
+                                   r"width\); remove it"),
+    ({"container__width": 4.0}, r"container\.width = 4\.0 must exceed 1\.5 times the longest "
+                                r"grain \(L \+ D = 3\)"),
+    ({"gravity": 0.0}, r"gravity = 0\.0 must be > 0 for protocol 'deposit'"),
+    ({"contact__bond_number": -1.0}, r"contact\.bond_number = -1\.0 .*>= 0"),
+    ({"protocol__max_time": KeyError}, r"missing key 'protocol\.max_time'"),
+    ({"protocol__ke_ratio": 0.0}, r"protocol\.ke_ratio = 0\.0 .*> 0"),
+])
+def test_bad_deposit_cases(changes, message):
+    with pytest.raises(ConfigError, match=message) as exc:
+        validate_case(dep_case(**changes), "case.yaml")
+    assert "\n" not in str(exc.value)
+
+
+def test_bond_number_needs_gravity():
+    case = copy.deepcopy(GOOD_CASE)
+    case["contact"]["bond_number"] = 10.0
+    with pytest.raises(ConfigError, match=r"contact\.bond_number = 10\.0 needs gravity > 0 "
+                                          r"\(F_c = Bo_g m g\), not 0\.0"):
+        validate_case(case, "case.yaml")
+
+
+def test_tapping_container_needs_its_diameter():
+    with pytest.raises(ConfigError, match=r"container\.diameter is required for shape "
+                                          r"'cylinder'"):
+        validate_case(tap_case(container={"shape": "cylinder", "width": 5e-3}), "case.yaml")

@@ -52,13 +52,19 @@ def get_final_output():
     if any(r.engine == "lammps" and CFG["_cases"][(r.study, r.variant, r.seed)]["particles"]
            ["aspect_ratio"] > 0 for r in RUNS):
         out.append(f"{RESULTS}/body_check/body_check.png")  # rods on LAMMPS: check its bodies
-    tapping = {s for s, st in CFG["studies"].items() if st["case"]["protocol"]["name"] == "tapping"}
+    protocol = {s: st["case"]["protocol"]["name"] for s, st in CFG["studies"].items()}
+    tapping = {s for s, name in protocol.items() if name == "tapping"}
+    deposit = {s for s, name in protocol.items() if name == "deposit"}
     for study in sorted({s for s, _ in study_variants()}):
         if study in tapping:
             out.append(f"{RESULTS}/{study}/figures/tapping.png")
+        elif study in deposit:
+            out.append(f"{RESULTS}/{study}/figures/deposit.png")
         elif varying_parameters(CFG, study):
             out.append(f"{RESULTS}/{study}/figures/trends.png")
     for study, variant in study_variants():
+        if study in deposit:
+            continue
         kinds = ["snapshots"] if study in tapping else ["pressure", "contacts", "phi_j"]
         out += expand(f"{RESULTS}/{study}/figures/{variant}.{{kind}}.png", kind=kinds)
     return out

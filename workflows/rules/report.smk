@@ -95,6 +95,25 @@ rule body_check:
         " --table {output.table} --figure {output.figure} 2> {log}"
 
 
+rule plot_deposit:
+    input:
+        lambda wc: [
+            f"{d}/{name}" for d in run_dirs(wc.study) for name in ("curves.csv", "run.json")
+        ],
+    output:
+        report(
+            f"{RESULTS}/{{study}}/figures/deposit.png",
+            caption="../report/deposit.rst",
+            category="{study}",
+        ),
+    log:
+        f"{RESULTS}/{{study}}/figures/deposit.log",
+    params:
+        dirs=lambda wc: " ".join(run_dirs(wc.study)),
+    shell:
+        "{PYTHON} -m workflows.scripts.plot_deposit --out {output} {params.dirs} 2> {log}"
+
+
 rule plot_tapping:
     input:
         lambda wc: [

@@ -6,8 +6,8 @@ import json
 import sys
 from pathlib import Path
 
-from analysis.summary import (TIDY_COLUMNS, analyse_compression, analyse_growth,
-                              analyse_jammed, analyse_tapping, tidy)
+from analysis.summary import (TIDY_COLUMNS, analyse_compression, analyse_deposit,
+                              analyse_growth, analyse_jammed, analyse_tapping, tidy)
 from pysim.io import atomic_write_text
 from workflows.case import ConfigError, load_case
 
@@ -26,6 +26,18 @@ def tap_plan(case: dict) -> dict:
     return {"start_step": tp.start, "dt": tp.dt, "period": tp.period,
             "amplitude": tp.amplitude, "frames_per_tap": tp.frames_per_tap,
             "container_diameter": dc, "layer_thickness": dc / 2, "n_layers": 4}
+
+
+def deposit_geometry(case: dict) -> dict:
+    """Keyword arguments of :func:`analysis.summary.analyse_deposit` for a deposition case:
+    slabs one grain length thick, the base's wall id in pysim's contact table (walls are
+    numbered x = 0, x = W, [y = 0, y = W,] base: :mod:`pysim.protocols.deposit`)."""
+    p = case["particles"]
+    d = p["diameter"]["mean"]
+    dim = p.get("dimension", 3)
+    return {"width": case["container"]["width"], "gravity": case["gravity"],
+            "slab": d * (1.0 + p.get("aspect_ratio", 0.0)), "density": p.get("density", 1.0),
+            "base_wall_id": -(2 * (dim - 1) + 1)}
 
 
 def main(argv=None) -> int:
@@ -61,6 +73,11 @@ def main(argv=None) -> int:
         rows, curves, _thermo = analyse_jammed(a.run)
     elif case["protocol"]["name"] == "tapping":
         rows, curves, _thermo = analyse_tapping(a.run, **tap_plan(case))
+    elif case["protocol"]["name"] == "deposit":
+        rows, curves = analyse_deposit(a.run, **deposit_geometry(case))
+        settled = record.get("settled")
+        rows.append(("settled", float(settled) if settled is not None else float("nan"),
+                     float("nan")))
     else:
         rows, curves, _thermo = analyse_compression(a.run, a.window, p_scale)
     df = tidy(rows, a.study, a.variant, a.engine, a.seed, json.loads(a.parameters))
