@@ -256,7 +256,9 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
       W``, of the vertical stress and of the pressure in slabs of thickness ``slab``
       (compressive positive; fits over slabs with at least 3 grains, not the loose top
       slab): ``sigma_m_vv``, ``h_s_vv`` with standard errors as uncertainties,
-      ``chi2_dof_vv``, and ``sigma_m_p``, ``h_s_p``;
+      ``chi2_dof_vv``, and ``sigma_m_p``, ``h_s_p``; ``janssen_saturated`` 1 when the
+      fitted ``h_s`` lies within the depth of the data, else 0 and the fit values NaN (a
+      straight profile fixes only the slope ``sigma_m / h_s``);
     * ``k_ratio``: ``sigma_hh / sigma_vv`` averaged over the lower half of the deposit;
     * ``apparent_mass_fraction``: vertical force on the base over the deposit's weight
       (1 without wall friction; Janssen: below 1; grain ``density`` per volume, per area
@@ -297,6 +299,16 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
             fit = JanssenFit(form="saturation", width=width).compute(
                 prof.loc[use, "depth"], prof.loc[use, col])
         except (JanssenFitError, RuntimeError):
+            rows += [(f"sigma_m_{tag}", np.nan, np.nan), (f"h_s_{tag}", np.nan, np.nan)]
+            prof[f"{col}_fit"] = np.nan
+            continue
+        x_max = float(prof.loc[use, "x"].max())
+        saturated = fit.h_s < x_max  # the profile bends within the data
+        if tag == "vv":
+            rows.append(("janssen_saturated", float(saturated), np.nan))
+        if not saturated:
+            # a straight profile: sigma_m and h_s grow without bound together; only their
+            # ratio (the slope) is determined, so no saturation values are reported
             rows += [(f"sigma_m_{tag}", np.nan, np.nan), (f"h_s_{tag}", np.nan, np.nan)]
             prof[f"{col}_fit"] = np.nan
             continue
