@@ -9,8 +9,9 @@ log, and *no* common-format files (they are moved to ``failed/``), so nothing
 half-written can be read as a result. The pipeline carries on with the other runs and
 the report lists the failed ones.
 
-pysim runs resume from their last checkpoint when one is present (a killed pipeline
-re-run picks up where it stopped).
+pysim runs resume from their last checkpoint when it belongs to the same case and initial
+data (``resume.json``), so a killed pipeline re-run picks up where it stopped; the
+checkpoint of another case (the configuration changed) is removed and the run starts over.
 """
 from __future__ import annotations
 
@@ -35,13 +36,32 @@ class RunFailure(RuntimeError):
     """A run did not produce a valid result; the message is one line."""
 
 
+def resume_stamp(engine: str, case: dict, data: Path) -> dict:
+    """What identifies a run for resuming: engine, case hash and the initial data's hash."""
+    import hashlib
+
+    from workflows.case import case_hash
+
+    return {"engine": engine, "case_hash": case_hash(case),
+            "data": hashlib.sha256(Path(data).read_bytes()).hexdigest()}
+
+
 def _pysim(case_path: Path, data: Path, out: Path, threads: int, timeout: float) -> dict:
     import pysim
+    from pysim.io import atomic_write_text
 
     cmd = [sys.executable, "-m", "pysim", "run", str(case_path), "--data", str(data), "--out",
            str(out), "--no-progress"]
-    if (out / "checkpoint.npz").exists():
+    # resume only a checkpoint of this very case and start (a changed case starts over)
+    stamp = resume_stamp("pysim", load_case(case_path), data)
+    stamp_path = out / "resume.json"
+    same = stamp_path.exists() and json.loads(stamp_path.read_text()) == stamp
+    if (out / "checkpoint.npz").exists() and same:
         cmd.append("--resume")
+    else:
+        for stale in [out / "checkpoint.npz", *out.glob("*.part")]:
+            stale.unlink(missing_ok=True)
+        atomic_write_text(stamp_path, json.dumps(stamp))
     log = out / "pysim.log"
     env = dict(os.environ, NUMBA_NUM_THREADS=str(threads))
     with open(log, "w") as fh:

@@ -134,3 +134,30 @@ def test_killed_pipeline_finishes_on_rerun_with_the_same_summary(tmp_path):
     a = pd.read_csv(ref / "summary.csv")[cols]
     b = pd.read_csv(res / "summary.csv")[cols]
     pd.testing.assert_frame_equal(a, b)
+
+
+def test_checkpoint_of_another_case_is_not_resumed(tmp_path):
+    """A checkpoint left by a run of a different case (the configuration changed since)
+    is removed, not resumed: the run starts over and succeeds."""
+    import json
+
+    import yaml
+
+    from pysim.initial import write_initial
+    from tests.pysim.test_checkpoint import TINY
+    from workflows import runner
+    from workflows.case import validate_case
+
+    case = validate_case(TINY)
+    (tmp_path / "case.yaml").write_text(yaml.safe_dump(case))
+    write_initial(case, tmp_path / "init.data")
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "checkpoint.npz").write_bytes(b"not a checkpoint")  # would fail if resumed
+    (out / "resume.json").write_text(json.dumps({"engine": "pysim", "case_hash": "other",
+                                                 "data": "other"}))
+    rec = runner.run("pysim", tmp_path / "case.yaml", tmp_path / "init.data", out, timeout=600)
+    assert rec["status"] == "ok", rec.get("error")
+    assert not (out / "checkpoint.npz").exists()
+    stamp = json.loads((out / "resume.json").read_text())
+    assert stamp == runner.resume_stamp("pysim", case, tmp_path / "init.data")
