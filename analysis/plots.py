@@ -202,11 +202,11 @@ def tapping_curves(runs, out, phi_max=None, n_layers: int = 4, layer_label: str 
         ax.set_ylabel("mean angle to the base (deg)")
         ax.set_xlabel("1 + tap number")
         ax.set_ylim(0, 90)
-    from matplotlib.ticker import LogLocator, NullFormatter, ScalarFormatter
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
     for ax in axes.ravel():
         ax.set_xscale("log")
         ax.xaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
-        ax.xaxis.set_major_formatter(ScalarFormatter())
+        ax.xaxis.set_major_formatter(FuncFormatter(lambda val, _: f"{val:g}"))
         ax.xaxis.set_minor_formatter(NullFormatter())
     axes[0, 0].legend(fontsize=6, loc="lower right")
     fig.suptitle("tapping: thin lines raw frames, thick the moving average over one oscillation; "
