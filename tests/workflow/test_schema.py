@@ -102,10 +102,10 @@ def test_cli_bad_case_exit_2_no_traceback_no_output(tmp_path):
     assert not out.exists()
 
 
-def tap_case(**changes):
-    from tests.pysim.test_tapping import TAP
-
-    case = copy.deepcopy(TAP)
+def changed(base: dict, **changes) -> dict:
+    """A deep copy of ``base`` with ``a__b=value`` set at ``base[a][b]`` (``KeyError``:
+    the key removed)."""
+    case = copy.deepcopy(base)
     for path, value in changes.items():
         *head, last = path.split("__")
         d = case
@@ -116,6 +116,12 @@ def tap_case(**changes):
         else:
             d[last] = value
     return case
+
+
+def tap_case(**changes):
+    from tests.pysim.test_tapping import TAP
+
+    return changed(TAP, **changes)
 
 
 @pytest.mark.parametrize("changes, message", [
@@ -151,19 +157,9 @@ def test_container_only_for_tapping():
 
 
 def dep_case(**changes):
-    from tests.pysim.test_deposit import with_
+    from tests.pysim.test_deposit import DEP
 
-    case = with_()
-    for path, value in changes.items():
-        *head, last = path.split("__")
-        d = case
-        for k in head:
-            d = d[k]
-        if value is KeyError:
-            del d[last]
-        else:
-            d[last] = value
-    return case
+    return changed(DEP, **changes)
 
 
 @pytest.mark.parametrize("changes, message", [
