@@ -266,6 +266,15 @@ def _error_line(text: str) -> str | None:
     return None
 
 
+def resume_stamp(engine: str, case: dict, data) -> dict:
+    """What identifies a run for resuming (``resume.json``): engine, case hash and the
+    initial data's hash."""
+    from workflows.case import case_hash
+
+    return {"engine": engine, "case_hash": case_hash(case),
+            "data": hashlib.sha256(Path(data).read_bytes()).hexdigest()}
+
+
 def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
         timeout: float = 3600.0) -> dict:
     """Run one engine on a case and leave the common-format files in ``outdir``.
@@ -277,10 +286,7 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     work = outdir / "work"
     extra = {}
     # resume only an interrupted run of this very case and start
-    from workflows.case import case_hash
-
-    stamp = {"engine": engine, "case_hash": case_hash(case),
-             "data": hashlib.sha256(Path(data).read_bytes()).hexdigest()}
+    stamp = resume_stamp(engine, case, data)
     same = work.exists() and (work / "resume.json").exists() and \
         json.loads((work / "resume.json").read_text()) == stamp
     restart = latest_restart(work) if engine == "lammps" and same else None

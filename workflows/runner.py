@@ -36,16 +36,6 @@ class RunFailure(RuntimeError):
     """A run did not produce a valid result; the message is one line."""
 
 
-def resume_stamp(engine: str, case: dict, data: Path) -> dict:
-    """What identifies a run for resuming: engine, case hash and the initial data's hash."""
-    import hashlib
-
-    from workflows.case import case_hash
-
-    return {"engine": engine, "case_hash": case_hash(case),
-            "data": hashlib.sha256(Path(data).read_bytes()).hexdigest()}
-
-
 def _pysim(case_path: Path, data: Path, out: Path, threads: int, timeout: float) -> dict:
     import pysim
     from pysim.io import atomic_write_text
@@ -53,7 +43,7 @@ def _pysim(case_path: Path, data: Path, out: Path, threads: int, timeout: float)
     cmd = [sys.executable, "-m", "pysim", "run", str(case_path), "--data", str(data), "--out",
            str(out), "--no-progress"]
     # resume only a checkpoint of this very case and start (a changed case starts over)
-    stamp = resume_stamp("pysim", load_case(case_path), data)
+    stamp = engines.resume_stamp("pysim", load_case(case_path), data)
     stamp_path = out / "resume.json"
     same = stamp_path.exists() and json.loads(stamp_path.read_text()) == stamp
     if (out / "checkpoint.npz").exists() and same:

@@ -1,7 +1,6 @@
 """The LAMMPS deposition deck (inputs/lammps/in.rods.deposit): settled rods inside the box
 in the common format, the deposit close to pysim's from the same column, and a run cut
 off after a restart file goes on to the same end (the peak kinetic energy passed back)."""
-import hashlib
 import json
 import subprocess
 import sys
@@ -15,7 +14,7 @@ from analysis.summary import analyse_deposit
 from pysim.initial import write_initial
 from tests.pysim.test_deposit import with_
 from workflows import engines
-from workflows.case import case_hash, validate_case
+from workflows.case import validate_case
 
 SMALL = with_(particles__n=40)
 
@@ -70,8 +69,7 @@ def test_lammps_deposit_resumes(dep_case, tmp_path):
     out = tmp_path / "run"
     work = out / "work"
     work.mkdir(parents=True)
-    stamp = {"engine": "lammps", "case_hash": case_hash(case),
-             "data": hashlib.sha256((d / "init.data").read_bytes()).hexdigest()}
+    stamp = engines.resume_stamp("lammps", case, d / "init.data")
     (work / "resume.json").write_text(json.dumps(stamp))
     vrods = engines.write_glued_data(d / "init.data", work / "glued.data", case)
     (work / "vrods.txt").write_text(repr(float(vrods)))

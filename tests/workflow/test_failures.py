@@ -145,7 +145,7 @@ def test_checkpoint_of_another_case_is_not_resumed(tmp_path):
 
     from pysim.initial import write_initial
     from tests.pysim.test_checkpoint import TINY
-    from workflows import runner
+    from workflows import engines, runner
     from workflows.case import validate_case
 
     case = validate_case(TINY)
@@ -160,4 +160,4 @@ def test_checkpoint_of_another_case_is_not_resumed(tmp_path):
     assert rec["status"] == "ok", rec.get("error")
     assert not (out / "checkpoint.npz").exists()
     stamp = json.loads((out / "resume.json").read_text())
-    assert stamp == runner.resume_stamp("pysim", case, tmp_path / "init.data")
+    assert stamp == engines.resume_stamp("pysim", case, tmp_path / "init.data")

@@ -1,7 +1,6 @@
 """The LAMMPS tapping deck (inputs/lammps/in.rods.tap): the same frame steps as pysim,
 rods kept inside the cylinder, the settled packing close to pysim's from the same start,
 and a run cut off after a restart file goes on to the same plan."""
-import hashlib
 import json
 import subprocess
 
@@ -15,7 +14,7 @@ from pysim.initial import write_initial
 from pysim.protocols.tapping import plan
 from tests.pysim.test_tapping import TAP, D
 from workflows import engines
-from workflows.case import case_hash, validate_case
+from workflows.case import validate_case
 
 
 def observables(case, run_dir):
@@ -87,8 +86,7 @@ def test_lammps_tapping_resumes_mid_tap(tap_case, tmp_path):
     out = tmp_path / "run"
     work = out / "work"
     work.mkdir(parents=True)
-    stamp = {"engine": "lammps", "case_hash": case_hash(case),
-             "data": hashlib.sha256((d / "init.data").read_bytes()).hexdigest()}
+    stamp = engines.resume_stamp("lammps", case, d / "init.data")
     (work / "resume.json").write_text(json.dumps(stamp))
     vrods = engines.write_glued_data(d / "init.data", work / "glued.data", case)
     (work / "vrods.txt").write_text(repr(float(vrods)))
