@@ -27,7 +27,6 @@ import csv
 import json
 import os
 import re
-import resource
 import shutil
 import subprocess
 import sys
@@ -159,25 +158,49 @@ def run_pysim(state: Path, cores: int, steps: int, friction: bool) -> dict:
     return json.loads(p.stdout.strip().splitlines()[-1])
 
 
+def _memory(key: str) -> int:
+    """``VmRSS`` (resident now) or ``VmHWM`` (peak) of this process in bytes, from
+    ``/proc/self/status``. Not ``getrusage``: its peak survives ``exec`` on Linux, so a
+    child would report the peak of the benchmark process that started it."""
+    with open("/proc/self/status") as fh:
+        for line in fh:
+            if line.startswith(key + ":"):
+                return int(line.split()[1]) * 1024
+    raise KeyError(f"{key} not in /proc/self/status")
+
+
 def _pysim_child(state: str, steps: int, friction: bool):
     import pysim.simulation as ps
     from pysim import State
 
-    base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    from pysim.initial import random_spherocylinders, random_spheres
+
+    m = MODEL
+    model = ps.ContactModel("hooke", m["k_n"], m["gamma_n"], k_t=m["k_t"], gamma_t=m["gamma_t"],
+                            mu=m["mu"] if friction else 0.0)
     d = np.load(state)
+    # load the compiled kernels on 100 particles of the same kind first, so that the
+    # memory per particle counts the particles' arrays and not the machine code
+    if "u" in d.files:
+        x, u, r, length, box = random_spherocylinders(np.full(100, 0.5), np.full(100, 4.0),
+                                                      0.2, 1)
+        tiny = State.create(x, r, length, box, axis=u)
+    else:
+        x, dia, box = random_spheres(np.ones(100), 0.3, seed=1)
+        tiny = State.spheres(x, dia / 2, box)
+    ps.Simulation(tiny, model, dt=m["dt"]).run(20)
+    del tiny
+    base = _memory("VmRSS")
     if "u" in d.files:
         st = State.create(d["x"], d["radius"], d["length"], d["box"], axis=d["u"])
     else:
         st = State.spheres(d["x"], d["radius"], d["box"])
-    m = MODEL
-    model = ps.ContactModel("hooke", m["k_n"], m["gamma_n"], k_t=m["k_t"], gamma_t=m["gamma_t"],
-                            mu=m["mu"] if friction else 0.0)
     sim = ps.Simulation(st, model, dt=m["dt"])
     sim.run(20)  # loads the compiled kernels, starts the thread pool
     t0 = time.perf_counter()
     sim.run(steps)
     sec = time.perf_counter() - t0
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    peak = _memory("VmHWM")
     print(json.dumps({"seconds": sec, "peak_rss": peak, "base_rss": base,
                       "contacts": sim.thermo().n_contacts}))
 
@@ -273,7 +296,6 @@ def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, rep
                 add(f"scaling_{kind}", "pysim", max(cores), n, scaling_steps, r["seconds"],
                     bytes_per_particle=round((r["peak_rss"] - r["base_rss"]) / n),
                     peak_mib=round(r["peak_rss"] / 2**20))
-                rows[-1]["bytes_per_particle"] = round((r["peak_rss"] - r["base_rss"]) / n)
     out.parent.mkdir(parents=True, exist_ok=True)
     with open(out, "w", newline="") as fh:
         w = csv.DictWriter(fh, FIELDS, extrasaction="ignore")
