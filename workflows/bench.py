@@ -239,6 +239,7 @@ def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, rep
         cores=(1, 2), engines=("pysim", "lammps-legacy", "lammps-granular", "liggghts"),
         scaling=(1_000, 10_000, 100_000, 1_000_000), scaling_steps=20, log=print):
     """The whole benchmark; returns the rows written to ``out``."""
+    out = Path(out).resolve()  # the peers run in the work folder: paths must be absolute
     work = out.parent / "bench"
     st = prepare(work, n_spheres, n_rods, log)
     engines = [e for e in engines if e != "liggghts" or shutil.which("liggghts")]
