@@ -137,13 +137,18 @@ def tidy(rows, study, case, engine, seed, parameters: dict | None = None) -> pd.
 def analyse_jammed(run_dir, c_min: int | None = None):
     """Observables of a mechanically stable packing (pysim's ``jammed`` protocol).
 
-    ``phi_j`` and the residuals come from ``jammed.json``; ``z_j`` (rattler-free, each
+    ``phi_j`` comes from ``jammed.json``; the residual forces and torques of the
+    rattler-free backbone (means and maxima, relative to the mean contact force and
+    torque; ``torque_residual_split`` with the forces of kinked parallel side contacts
+    placed along their overlap, :mod:`analysis.balance`) from the last contact table;
+    ``z_j`` (rattler-free, each
     contact once: ``z_tilde``), ``z_j_bonds`` (2-D parallel side contacts counted twice),
     the fractions of tip-tip, tip-side and side-side contacts, and the orientational
     order ``s2``, ``s4`` (2-D) or ``s_nematic`` (3-D) of the final frame.
     """
     import json
 
+    from analysis.balance import ForceBalance
     from analysis.contacts import TYPE_NAMES, ContactTypes
     from analysis.order import OrientationOrder2D
 
@@ -151,12 +156,18 @@ def analyse_jammed(run_dir, c_min: int | None = None):
     res = json.loads((Path(run_dir) / "jammed.json").read_text())
     frame, contacts = run.frames()[-1]
     cn = ContactNumber(c_min).compute(frame, contacts)
+    bal = ForceBalance(c_min=c_min).compute(frame, contacts)
     rows = [("phi_j", res["phi_j"], np.nan), ("energy_density", res["energy_density"], np.nan),
             ("z_j", cn.z_rattler_free, np.nan), ("z_j_bonds", cn.z_bonds, np.nan),
             ("z_j_with_rattlers", cn.z, np.nan),
             ("rattler_fraction_j", cn.n_rattlers / frame.n, np.nan),
-            ("force_residual", res["force_residual_mean"], np.nan),
-            ("torque_residual", res["torque_residual_mean"], np.nan),
+            ("force_residual", bal.force_mean, np.nan),
+            ("force_residual_max", bal.force_max, np.nan),
+            ("torque_residual", bal.torque_mean, np.nan),
+            ("torque_residual_max", bal.torque_max, np.nan),
+            ("torque_residual_split", bal.torque_split_mean, np.nan),
+            ("torque_residual_split_max", bal.torque_split_max, np.nan),
+            ("kink_contacts", float(bal.n_kink), np.nan),
             ("bisections", float(res["bisections"]), np.nan),
             ("converged", float(res["converged"]), np.nan)]
     if np.any(frame.length > 0):
