@@ -23,6 +23,11 @@ Pairs out of contact add nothing and every pair's contribution is a pure functio
 its two particles, so forces do not depend on how many extra pairs the Verlet list
 holds: results are bit-identical across list rebuilds and restarts.
 
+With ``spine_contact = "end_bonds"`` (:func:`end_bond`, frictionless only) a rod pair is
+up to four bonds, each a contact of the same law; a pair's forces, torques and virial
+are the sums over its bonds, and its recorded contact has the summed force, the
+force-weighted mean point, and the normal and overlap of the deepest bond.
+
 Geometry (science.md section 2): closest points ``p_i = x_i + s u_i`` and
 ``p_j = x_j + t u_j`` of the spines (:func:`pysim.geometry.closest_params`), distance
 ``d = |p_j - p_i|``, overlap ``delta = R_i + R_j - d``, normal ``n = (p_j - p_i)/d``,
@@ -32,8 +37,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pysim.forces import (D_COH, F_COH, GAMMA_N, GAMMA_T, HERTZ, HOOKE, K_N, K_T, MU,
-                          cohesion_force, elastic_energy, normal_force, tangential_force)
+from pysim.forces import (D_COH, END_BONDS, F_COH, GAMMA_N, GAMMA_T, HERTZ, HOOKE, K_N, K_T,
+                          MU, cohesion_force, elastic_energy, normal_force, tangential_force)
 from pysim.geometry import closest_params
 from pysim.jit import njit, pnjit, prange
 
@@ -65,6 +70,33 @@ def spine_gap(d0, d1, d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj):
     """Closest points of two spines, ``d = x_j - x_i``: returns ``a = p_i - x_i`` (3) and
     the gap ``g = p_j - p_i`` (3) (science.md section 2)."""
     s, t = closest_params(-d0, -d1, -d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj)
+    a0 = s * ui0
+    a1 = s * ui1
+    a2 = s * ui2
+    return a0, a1, a2, d0 + t * uj0 - a0, d1 + t * uj1 - a1, d2 + t * uj2 - a2
+
+
+@njit
+def end_bond(d0, d1, d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj, k):
+    """Bond ``k`` of the end-bond geometry, ``d = x_j - x_i``: ``k = 0, 1`` the end
+    ``s = -h_i, +h_i`` of spine i against the closest point of spine j, ``k = 2, 3`` the
+    end ``t = -h_j, +h_j`` of spine j against spine i. Returns ``a = p_i - x_i`` and the
+    gap ``g = p_j - p_i`` as :func:`spine_gap`.
+
+    Summing the contact law over the four bonds gives an energy that is smooth where the
+    closest-point law has a kink (parallel side contacts: the closest point jumps from one
+    end of the overlap to the other); a parallel side contact becomes two bonds at the
+    ends of the overlapping projection (science.md's two-bond count), a tip-side contact
+    one bond, a tip-tip contact two coincident ones. In 2-D the spines of a small overlap
+    never cross, so the closest points are always among these bonds."""
+    if k < 2:
+        s = -hi if k == 0 else hi
+        t = uj0 * (s * ui0 - d0) + uj1 * (s * ui1 - d1) + uj2 * (s * ui2 - d2)
+        t = min(max(t, -hj), hj)
+    else:
+        t = -hj if k == 2 else hj
+        s = ui0 * (d0 + t * uj0) + ui1 * (d1 + t * uj1) + ui2 * (d2 + t * uj2)
+        s = min(max(s, -hi), hi)
     a0 = s * ui0
     a1 = s * ui1
     a2 = s * ui2
@@ -156,6 +188,8 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
     fcoh, dcoh = p[F_COH], p[D_COH]
     b0, b1, b2 = box[0], box[1], box[2]
     p0, p1, p2 = periodic[0], periodic[1], periodic[2]
+    ends = rods and p[END_BONDS] != 0.0
+    nbond = 4 if ends else 1
     nb = (n + BLOCK - 1) // BLOCK
     blk = np.zeros((nb if stats else 0, _STATS))
     for b in prange(nb):
@@ -176,17 +210,62 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
                 j = pj[k]
                 d0, d1, d2 = min_image(x[j, 0] - xi0, x[j, 1] - xi1, x[j, 2] - xi2, b0, b1, b2,
                                        p0, p1, p2)
-                a0 = 0.0
-                a1 = 0.0
-                a2 = 0.0
-                g0, g1, g2 = d0, d1, d2
-                if rods:
-                    a0, a1, a2, g0, g1, g2 = spine_gap(d0, d1, d2, ui0, ui1, ui2, hi, u[j, 0],
-                                                       u[j, 1], u[j, 2], half[j])
-                dist2 = g0 * g0 + g1 * g1 + g2 * g2
                 rj = radius[j]
                 reach = ri + rj + dcoh
-                if dist2 >= reach * reach:
+                uj0, uj1, uj2, hj = u[j, 0], u[j, 1], u[j, 2], half[j]
+                # sums over the bonds of the pair (one, or four end bonds)
+                F0 = 0.0
+                F1 = 0.0
+                F2 = 0.0
+                t0 = 0.0
+                t1 = 0.0
+                t2 = 0.0
+                r0 = 0.0
+                r1 = 0.0
+                r2 = 0.0
+                pe = 0.0
+                touching = False
+                for kb in range(nbond):
+                    a0 = 0.0
+                    a1 = 0.0
+                    a2 = 0.0
+                    g0, g1, g2 = d0, d1, d2
+                    if ends:
+                        a0, a1, a2, g0, g1, g2 = end_bond(d0, d1, d2, ui0, ui1, ui2, hi, uj0,
+                                                          uj1, uj2, hj, kb)
+                    elif rods:
+                        a0, a1, a2, g0, g1, g2 = spine_gap(d0, d1, d2, ui0, ui1, ui2, hi, uj0,
+                                                           uj1, uj2, hj)
+                    dist2 = g0 * g0 + g1 * g1 + g2 * g2
+                    if dist2 >= reach * reach:
+                        continue
+                    touching = True
+                    h0 = 0.0
+                    h1 = 0.0
+                    h2 = 0.0
+                    if friction:
+                        h0, h1, h2 = hist[k, 0], hist[k, 1], hist[k, 2]
+                    (B0, B1, B2, c0, c1, c2, e0, e1, e2, n0, n1, n2, delta, h0, h1,
+                     h2) = pair_force(g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, ri, rj, vi0,
+                                      vi1, vi2, wi0, wi1, wi2, v[j, 0], v[j, 1], v[j, 2],
+                                      omega[j, 0], omega[j, 1], omega[j, 2], h0, h1, h2, law,
+                                      kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt)
+                    if friction:
+                        hist[k, 0] = h0
+                        hist[k, 1] = h1
+                        hist[k, 2] = h2
+                    F0 += B0
+                    F1 += B1
+                    F2 += B2
+                    t0 += c1 * B2 - c2 * B1
+                    t1 += c2 * B0 - c0 * B2
+                    t2 += c0 * B1 - c1 * B0
+                    r0 -= e1 * B2 - e2 * B1
+                    r1 -= e2 * B0 - e0 * B2
+                    r2 -= e0 * B1 - e1 * B0
+                    if stats and delta > 0.0:
+                        pe += elastic_energy(law, kn, delta, ri + rj)
+                if not touching:
                     if friction:
                         hist[k, 0] = 0.0
                         hist[k, 1] = 0.0
@@ -194,34 +273,20 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
                     for c in range(FJ_COLUMNS):
                         fj[k, c] = 0.0
                     continue
-                h0 = 0.0
-                h1 = 0.0
-                h2 = 0.0
-                if friction:
-                    h0, h1, h2 = hist[k, 0], hist[k, 1], hist[k, 2]
-                (F0, F1, F2, c0, c1, c2, e0, e1, e2, n0, n1, n2, delta, h0, h1, h2) = pair_force(
-                    g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, ri, rj, vi0, vi1, vi2, wi0, wi1,
-                    wi2, v[j, 0], v[j, 1], v[j, 2], omega[j, 0], omega[j, 1], omega[j, 2], h0,
-                    h1, h2, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt)
-                if friction:
-                    hist[k, 0] = h0
-                    hist[k, 1] = h1
-                    hist[k, 2] = h2
                 s0 += F0
                 s1 += F1
                 s2 += F2
-                q0 += c1 * F2 - c2 * F1
-                q1 += c2 * F0 - c0 * F2
-                q2 += c0 * F1 - c1 * F0
+                q0 += t0
+                q1 += t1
+                q2 += t2
                 fj[k, 0] = -F0
                 fj[k, 1] = -F1
                 fj[k, 2] = -F2
-                fj[k, 3] = -(e1 * F2 - e2 * F1)
-                fj[k, 4] = -(e2 * F0 - e0 * F2)
-                fj[k, 5] = -(e0 * F1 - e1 * F0)
+                fj[k, 3] = r0
+                fj[k, 4] = r1
+                fj[k, 5] = r2
                 if stats:
-                    if delta > 0.0:
-                        blk[b, 0] += elastic_energy(law, kn, delta, ri + rj)
+                    blk[b, 0] += pe
                     blk[b, 1] += 1.0
                     blk[b, 2] += d0 * F0
                     blk[b, 3] += d0 * F1
@@ -459,54 +524,94 @@ def pair_forces(x, v, omega, u, radius, half, box, periodic, pi, pj, hist, law, 
     for k in range(half.shape[0]):
         if half[k] > 0.0:
             rods = True
+    ends = rods and p[END_BONDS] != 0.0
+    nbond = 4 if ends else 1
     for k in range(pi.shape[0]):
         i = pi[k]
         j = pj[k]
         d0, d1, d2 = min_image(x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2],
                                box[0], box[1], box[2], periodic[0], periodic[1], periodic[2])
-        a0 = 0.0
-        a1 = 0.0
-        a2 = 0.0
-        g0, g1, g2 = d0, d1, d2
-        if rods:
-            a0, a1, a2, g0, g1, g2 = spine_gap(d0, d1, d2, u[i, 0], u[i, 1], u[i, 2], half[i],
-                                               u[j, 0], u[j, 1], u[j, 2], half[j])
-        dist2 = g0 * g0 + g1 * g1 + g2 * g2
         reach = radius[i] + radius[j] + dcoh
-        if dist2 >= reach * reach:
+        # sums over the bonds of the pair; the recorded point is the force-weighted mean of
+        # the bond points, the normal and overlap those of the deepest bond
+        F0 = 0.0
+        F1 = 0.0
+        F2 = 0.0
+        w = 0.0
+        pc0 = 0.0
+        pc1 = 0.0
+        pc2 = 0.0
+        m0 = 0.0
+        m1 = 0.0
+        m2 = 0.0
+        deepest = -np.inf
+        nbt = 0
+        for kb in range(nbond):
+            a0 = 0.0
+            a1 = 0.0
+            a2 = 0.0
+            g0, g1, g2 = d0, d1, d2
+            if ends:
+                a0, a1, a2, g0, g1, g2 = end_bond(d0, d1, d2, u[i, 0], u[i, 1], u[i, 2],
+                                                  half[i], u[j, 0], u[j, 1], u[j, 2], half[j],
+                                                  kb)
+            elif rods:
+                a0, a1, a2, g0, g1, g2 = spine_gap(d0, d1, d2, u[i, 0], u[i, 1], u[i, 2],
+                                                   half[i], u[j, 0], u[j, 1], u[j, 2], half[j])
+            dist2 = g0 * g0 + g1 * g1 + g2 * g2
+            if dist2 >= reach * reach:
+                continue
+            nbt += 1
+            h0 = 0.0
+            h1 = 0.0
+            h2 = 0.0
+            if friction:
+                h0, h1, h2 = hist[k, 0], hist[k, 1], hist[k, 2]
+            (B0, B1, B2, c0, c1, c2, e0, e1, e2, n0, n1, n2, delta, h0, h1, h2) = pair_force(
+                g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, radius[i], radius[j], v[i, 0],
+                v[i, 1], v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2], v[j, 0], v[j, 1],
+                v[j, 2], omega[j, 0], omega[j, 1], omega[j, 2], h0, h1, h2, law, kn, gn, kt,
+                gt, mu, fcoh, dcoh, friction, dt)
+            if friction:
+                hist[k, 0] = h0
+                hist[k, 1] = h1
+                hist[k, 2] = h2
+            if delta > 0.0:
+                pe += elastic_energy(law, kn, delta, radius[i] + radius[j])
+            F0 += B0
+            F1 += B1
+            F2 += B2
+            f[i, 0] += B0
+            f[i, 1] += B1
+            f[i, 2] += B2
+            f[j, 0] -= B0
+            f[j, 1] -= B1
+            f[j, 2] -= B2
+            torque[i, 0] += c1 * B2 - c2 * B1
+            torque[i, 1] += c2 * B0 - c0 * B2
+            torque[i, 2] += c0 * B1 - c1 * B0
+            torque[j, 0] -= e1 * B2 - e2 * B1
+            torque[j, 1] -= e2 * B0 - e0 * B2
+            torque[j, 2] -= e0 * B1 - e1 * B0
+            if record:
+                fb = np.sqrt(B0 * B0 + B1 * B1 + B2 * B2)
+                w += fb
+                pc0 += fb * c0
+                pc1 += fb * c1
+                pc2 += fb * c2
+                if nbt == 1:
+                    m0, m1, m2 = c0, c1, c2
+                if delta > deepest:
+                    deepest = delta
+                    rec[nc, 3] = n0
+                    rec[nc, 4] = n1
+                    rec[nc, 5] = n2
+        if nbt == 0:
             if friction:
                 hist[k, 0] = 0.0
                 hist[k, 1] = 0.0
                 hist[k, 2] = 0.0
             continue
-        h0 = 0.0
-        h1 = 0.0
-        h2 = 0.0
-        if friction:
-            h0, h1, h2 = hist[k, 0], hist[k, 1], hist[k, 2]
-        (F0, F1, F2, c0, c1, c2, e0, e1, e2, n0, n1, n2, delta, h0, h1, h2) = pair_force(
-            g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, radius[i], radius[j], v[i, 0], v[i, 1],
-            v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2], v[j, 0], v[j, 1], v[j, 2],
-            omega[j, 0], omega[j, 1], omega[j, 2], h0, h1, h2, law, kn, gn, kt, gt, mu, fcoh,
-            dcoh, friction, dt)
-        if friction:
-            hist[k, 0] = h0
-            hist[k, 1] = h1
-            hist[k, 2] = h2
-        if delta > 0.0:
-            pe += elastic_energy(law, kn, delta, radius[i] + radius[j])
-        f[i, 0] += F0
-        f[i, 1] += F1
-        f[i, 2] += F2
-        f[j, 0] -= F0
-        f[j, 1] -= F1
-        f[j, 2] -= F2
-        torque[i, 0] += c1 * F2 - c2 * F1
-        torque[i, 1] += c2 * F0 - c0 * F2
-        torque[i, 2] += c0 * F1 - c1 * F0
-        torque[j, 0] -= e1 * F2 - e2 * F1
-        torque[j, 1] -= e2 * F0 - e0 * F2
-        torque[j, 2] -= e0 * F1 - e1 * F0
         virial[0, 0] += d0 * F0
         virial[0, 1] += d0 * F1
         virial[0, 2] += d0 * F2
@@ -517,15 +622,14 @@ def pair_forces(x, v, omega, u, radius, half, box, periodic, pi, pj, hist, law, 
         virial[2, 1] += d2 * F1
         virial[2, 2] += d2 * F2
         if record:
+            if nbt > 1 and w > 0.0:
+                m0, m1, m2 = pc0 / w, pc1 / w, pc2 / w
             rec_ij[nc, 0] = i
             rec_ij[nc, 1] = j
-            rec[nc, 0] = x[i, 0] + c0
-            rec[nc, 1] = x[i, 1] + c1
-            rec[nc, 2] = x[i, 2] + c2
-            rec[nc, 3] = n0
-            rec[nc, 4] = n1
-            rec[nc, 5] = n2
-            rec[nc, 6] = delta
+            rec[nc, 0] = x[i, 0] + m0
+            rec[nc, 1] = x[i, 1] + m1
+            rec[nc, 2] = x[i, 2] + m2
+            rec[nc, 6] = deepest
             rec[nc, 7] = F0
             rec[nc, 8] = F1
             rec[nc, 9] = F2

@@ -33,15 +33,18 @@ HERTZ = 1
 HARMONIC = 2
 LAW_IDS = {"hooke": HOOKE, "hertz": HERTZ, "harmonic": HARMONIC}
 
-# indices into the contact parameter array
-K_N, GAMMA_N, K_T, GAMMA_T, MU, F_COH, D_COH = range(7)
-N_PARAMS = 7
+# indices into the contact parameter array (END_BONDS: 1.0 selects the end-bond geometry
+# of rod pairs, pysim.contacts.end_bond)
+K_N, GAMMA_N, K_T, GAMMA_T, MU, F_COH, D_COH, END_BONDS = range(8)
+N_PARAMS = 8
 
 
-def contact_params(k_n, gamma_n=0.0, k_t=0.0, gamma_t=0.0, mu=0.0, f_coh=0.0, d_coh=0.0):
+def contact_params(k_n, gamma_n=0.0, k_t=0.0, gamma_t=0.0, mu=0.0, f_coh=0.0, d_coh=0.0,
+                   end_bonds=False):
     """Pack contact parameters in the order of the index constants."""
     p = np.zeros(N_PARAMS)
-    p[[K_N, GAMMA_N, K_T, GAMMA_T, MU, F_COH, D_COH]] = [k_n, gamma_n, k_t, gamma_t, mu, f_coh, d_coh]
+    p[[K_N, GAMMA_N, K_T, GAMMA_T, MU, F_COH, D_COH, END_BONDS]] = [
+        k_n, gamma_n, k_t, gamma_t, mu, f_coh, d_coh, 1.0 if end_bonds else 0.0]
     return p
 
 

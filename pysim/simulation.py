@@ -41,6 +41,10 @@ class ContactModel:
       rotation (torque/angular velocity).
     * wall contacts use ``k_n``, ``gamma_n``, ``k_t``, ``gamma_t`` with ``mu_wall``
       (default ``mu``) and no cohesion.
+    * ``spine_contact``: ``"closest"`` (science.md section 2: one contact at the closest
+      points of the spines) or ``"end_bonds"`` (frictionless rods: one bond from each
+      spine end to the other spine, :func:`pysim.contacts.end_bond`; a smooth energy
+      where the closest-point law has a kink at parallel side contacts).
     """
 
     law: str
@@ -54,10 +58,17 @@ class ContactModel:
     gamma_bg: float = 0.0
     gamma_rot: float = 0.0
     mu_wall: float | None = None
+    spine_contact: str = "closest"
 
     def __post_init__(self):
         if self.law not in LAW_IDS:
             raise ValueError(f"unknown contact law {self.law!r}; valid: {sorted(LAW_IDS)}")
+        if self.spine_contact not in ("closest", "end_bonds"):
+            raise ValueError(f"unknown spine_contact {self.spine_contact!r}; valid: "
+                             "'closest', 'end_bonds'")
+        if self.spine_contact == "end_bonds" and (self.mu > 0 or self.f_coh > 0):
+            raise ValueError("spine_contact 'end_bonds' is frictionless and cohesionless "
+                             f"(got mu = {self.mu}, f_coh = {self.f_coh})")
         if not self.k_n > 0:
             raise ValueError(f"k_n must be > 0, got {self.k_n}")
         for name in ("gamma_n", "k_t", "gamma_t", "mu", "f_coh", "d_coh", "gamma_bg", "gamma_rot"):
@@ -76,7 +87,7 @@ class ContactModel:
 
     def pair_params(self) -> np.ndarray:
         return contact_params(self.k_n, self.gamma_n, self.k_t, self.gamma_t, self.mu,
-                              self.f_coh, self.d_coh)
+                              self.f_coh, self.d_coh, self.spine_contact == "end_bonds")
 
     def wall_params(self) -> np.ndarray:
         mu = self.mu if self.mu_wall is None else self.mu_wall

@@ -259,6 +259,11 @@ def _check_case(case: dict, source: str, at: str):
     if pr["name"] == "growth" and pr["phi_grow"] <= pr["phi_init"]:
         raise ConfigError(f"{source}: {at}protocol.phi_grow = {pr['phi_grow']} must be above "
                           f"phi_init = {pr['phi_init']}")
+    if c.get("spine_contact") == "end_bonds" and (dim != 2 or c["friction"] > 0
+                                                  or c.get("bond_number", 0) > 0):
+        raise ConfigError(f"{source}: {at}contact.spine_contact = end_bonds is for 2-D "
+                          "frictionless, cohesionless rods (dimension 2, friction 0, no "
+                          f"bond_number); got dimension {dim}, friction {c['friction']}")
     if c["friction"] > 0 and not c["k_t"] > 0:
         raise ConfigError(f"{source}: {at}contact.k_t = {c['k_t']} must be > 0 when "
                           f"friction = {c['friction']} > 0")

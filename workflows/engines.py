@@ -45,6 +45,9 @@ def supports(engine: str, case: dict) -> str | None:
     """``None`` when the engine can run the case, else the reason it cannot."""
     if engine == "pysim":
         return None
+    if case["contact"].get("spine_contact", "closest") != "closest":
+        return (f"{engine} has no end-bond rod contacts (contact.spine_contact = "
+                f"{case['contact']['spine_contact']} is pysim's)")
     k = kind(case)
     name = case["protocol"]["name"]
     if name == "tapping":
@@ -63,10 +66,15 @@ def supports(engine: str, case: dict) -> str | None:
     if name != "compress":
         return (f"{engine} runs only the 'compress', 'tapping' and 'deposit' protocols here, "
                 f"not '{name}'")
+    if k == "2d":
+        if engine != "lammps":
+            return f"{engine} has no 2-D deck"
+        if case["contact"]["law"] != "harmonic" or case["contact"].get("friction", 0.0) > 0:
+            return ("the LAMMPS 2-D deck implements the frictionless soft harmonic law only "
+                    f"(got law {case['contact']['law']})")
+        return None  # overdamped: emulated by strong drag against the deforming box
     if case["protocol"].get("integrator", "verlet") != "verlet":
         return f"{engine} integrates inertial dynamics only (no overdamped integrator)"
-    if k == "2d":
-        return f"{engine} has no 2-D deck yet"
     if k == "rods" and engine == "liggghts":
         return ("LIGGGHTS cannot compress multisphere rods with fix deform ('fix deform and fix "
                 "multisphere are incompatible', shared/engines.md)")
@@ -185,12 +193,40 @@ def restart_interval(case: dict) -> int:
     return RESTART_DUMPS * case.get("output", {}).get("dump_every", 4000)
 
 
+#: density per area of LAMMPS' 2-D rods: the overdamped limit needs m / (k_d A) = rho / k_d
+#: well below the compression's time scales (rho / k_d = 0.05 t_0; damping ratio ~3)
+RHO_2D = 0.05
+
+
+def deck_vars_2d(case: dict) -> dict[str, str]:
+    """``-var`` values of ``in.2d.compress`` (see its header): the harmonic law, the drag
+    per area, the two radii, disks per rod and the stages of the overdamped protocol."""
+    from workflows.case import particle_measure, size_extremes
+
+    p, c, pr = case["particles"], case["contact"], case["protocol"]
+    out = case.get("output", {})
+    alpha = p["aspect_ratio"]
+    d_small, _, d_big = size_extremes(p["diameter"])
+    disks = glued_spheres(alpha * d_small, d_small, p.get("glued_spacing", 0.25))
+    a_small = particle_measure(d_small, alpha, 2)
+    v = {"k_e": c["k_n"], "k_d": pr.get("k_d", 1.0), "r_small": d_small / 2, "r_big": d_big / 2,
+         "a_small": a_small, "a_big": particle_measure(d_big, alpha, 2), "disks": disks,
+         "rho_disk": RHO_2D * a_small / (disks * np.pi * d_small**2 / 4), "dt": pr["dt"],
+         "phi_init": pr["phi_init"], "phi_final": pr["phi_final"], "rate": pr["rate"],
+         "phi_fast": pr.get("phi_fast", pr["phi_init"]), "rate_fast": pr.get("rate_fast", 1.0),
+         "thermo_every": out.get("thermo_every", 1000), "dump_every": out.get("dump_every", 4000),
+         "ghost_cut": (alpha + 1.0) * d_big + 0.2 * d_big}
+    return {k: repr(float(x)) if isinstance(x, float) else str(x) for k, x in v.items()}
+
+
 def deck_vars(case: dict, engine: str) -> dict[str, str]:
     """``-var`` values of the case's deck (compression, tapping or deposition)."""
     if case["protocol"]["name"] == "tapping":
         return tap_deck_vars(case)
     if case["protocol"]["name"] == "deposit":
         return deposit_deck_vars(case)
+    if kind(case) == "2d":
+        return deck_vars_2d(case)
     c, pr = case["contact"], case["protocol"]
     out = case.get("output", {})
     v = {
@@ -305,12 +341,14 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     if engine == "lammps":
         extra["restart_every"] = restart_interval(case)
     engine_data = Path(data).resolve()
-    if kind(case) == "rods":
+    glued = kind(case) in ("rods", "2d")
+    if glued:
         engine_data = (work / "glued.data").resolve()
         if restart is None or not engine_data.exists():
             vrods = write_glued_data(data, engine_data, case)
             (work / "vrods.txt").write_text(repr(float(vrods)))
-        extra["vrods"] = (work / "vrods.txt").read_text().strip()
+        extra["arods" if kind(case) == "2d" else "vrods"] = \
+            (work / "vrods.txt").read_text().strip()
     cmd = command(engine, engine_data, work.resolve(), case, ranks, extra)
     screen_path = work / "screen.txt"
     env = dict(os.environ, OMP_NUM_THREADS="1")
@@ -339,7 +377,7 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     particles = work / "particles.dump"
     if engine == "liggghts":
         restore_box_precision(particles, work / "box.dat", data)
-    if kind(case) == "rods":
+    if glued:
         stats = convert_glued_rods(work / "contacts.native", particles, work / "contacts.dump",
                                    work / "rods.dump")
         os.replace(work / "rods.dump", particles)
@@ -430,34 +468,47 @@ def write_glued_data(init_path, out_path, case: dict) -> float:
     section read with ``fix property/atom mol``). Every sphere gets the density that gives
     the rod the mass of the solid spherocylinder, ``rho V_rod / (n pi D^3 / 6)``. Spheres
     are written around the rod centre without wrapping, so LAMMPS sets image flags that
-    keep each body whole.
+    keep each body whole. 2-D cases (``in.2d.compress``): disks in the plane ``z = 0`` of a
+    unit-thick periodic box, atom type 1 for the smallest diameter and 2 for larger ones,
+    masses set by the deck; the total true rod *area* is returned.
     """
     from pysim.io import atomic_write_text, read_particle_data
 
     d = read_particle_data(init_path)
     spacing = case["particles"].get("glued_spacing", 0.25)
     rho = case["particles"].get("density", 1.0)
+    two_d = case["particles"].get("dimension", 3) == 2
     rows, mols, vels = [], [], []
     vtot = 0.0
     k = 0
+    d_small = float(2.0 * d["radius"].min())
     for i in range(len(d["ids"])):
         dia = 2.0 * d["radius"][i]
         length = d["length"][i]
         ns = glued_spheres(length, dia, spacing)
-        vrod = np.pi * dia**2 * length / 4 + np.pi * dia**3 / 6
+        if two_d:  # areas; masses are set by the 2-D deck (set density/disc)
+            vrod = dia * length + np.pi * dia**2 / 4
+            dens = 1.0
+        else:
+            vrod = np.pi * dia**2 * length / 4 + np.pi * dia**3 / 6
+            dens = rho * vrod / (ns * np.pi * dia**3 / 6)
         vtot += vrod
-        dens = rho * vrod / (ns * np.pi * dia**3 / 6)
+        atype = 2 if two_d and dia > d_small * (1 + 1e-9) else 1
         offsets = np.linspace(-length / 2, length / 2, ns) if ns > 1 else np.zeros(1)
         for sk in offsets:
             k += 1
             p = d["x"][i] + sk * d["axis"][i]
-            rows.append(f"{k} 1 {dia:.16g} {dens:.16g} {p[0]:.16g} {p[1]:.16g} {p[2]:.16g}")
+            if two_d:
+                p[2] = 0.0
+            rows.append(f"{k} {atype} {dia:.16g} {dens:.16g} {p[0]:.16g} {p[1]:.16g} {p[2]:.16g}")
             mols.append(f"{k} {d['ids'][i]}")
             vi = d["v"][i]
             vels.append(f"{k} {vi[0]:.16g} {vi[1]:.16g} {vi[2]:.16g} 0 0 0")
-    lo, hi = d["box_lo"], d["box_lo"] + d["box"]
+    lo, hi = d["box_lo"].copy(), d["box_lo"] + d["box"]
+    if two_d:  # a unit-thick periodic z for LAMMPS' 2-D box
+        lo[2], hi[2] = -0.5, 0.5
     head = [f"# rodpack glued-sphere rods ({len(d['ids'])} rods, spacing <= {spacing} D)", "",
-            f"{k} atoms", "1 atom types", ""]
+            f"{k} atoms", f"{2 if two_d else 1} atom types", ""]
     head += [f"{lo[a]:.16g} {hi[a]:.16g} {ax}lo {ax}hi" for a, ax in enumerate("xyz")]
     text = "\n".join(head + ["", "Atoms # sphere", ""] + rows + ["", "Molecules", ""] + mols)
     if np.any(d["v"] != 0.0):  # every sphere moves with its rod (no initial spin)

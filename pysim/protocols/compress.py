@@ -54,7 +54,8 @@ def model_from_case(case: dict) -> ContactModel:
     return ContactModel(c["law"], k_n=c["k_n"], gamma_n=c.get("gamma_n", 0.0),
                         k_t=c.get("k_t", 0.0), gamma_t=c.get("gamma_t", 0.0),
                         mu=c.get("friction", 0.0), gamma_bg=gamma_bg,
-                        gamma_rot=c.get("gamma_rot", gamma_bg * length**2 / 12.0))
+                        gamma_rot=c.get("gamma_rot", gamma_bg * length**2 / 12.0),
+                        spine_contact=c.get("spine_contact", "closest"))
 
 
 def max_overlap(case: dict) -> float:

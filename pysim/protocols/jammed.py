@@ -17,9 +17,11 @@
 The final packing is the mechanically stable state: its frame is the last of
 ``particles.dump``/``contacts.dump`` and ``jammed.json`` records ``phi_j``, ``U/L^d``, the
 number of bisections, and the residual forces and torques relative to the mean contact
-force and torque (the spine-distance law has a kink for parallel side-by-side rods, so
-those residuals are not zero for rods). Energies are in units of ``k_n`` and lengths in
-units of the smallest diameter.
+force and torque. With the closest-point law these residuals stay of the order of the
+contact forces for rods: the law has a kink at parallel side-by-side contacts, where
+FIRE stalls; use ``contact.spine_contact: end_bonds`` (:func:`pysim.contacts.end_bond`),
+whose energy is smooth there, for mechanically stable rod packings. Energies are in
+units of ``k_n`` and lengths in units of the smallest diameter.
 """
 from __future__ import annotations
 
