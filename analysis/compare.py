@@ -28,7 +28,7 @@ def per_engine(summary: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
-ENGINE_ORDER = ("pysim", "lammps", "liggghts")
+ENGINE_ORDER = ("pysim", "lammps", "liggghts", "lammps-body")
 
 
 def _order(engine: str) -> tuple:

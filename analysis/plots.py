@@ -10,7 +10,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-ENGINE_COLORS = {"pysim": "tab:blue", "lammps": "tab:orange", "liggghts": "tab:green"}
+ENGINE_COLORS = {"pysim": "tab:blue", "lammps": "tab:orange", "liggghts": "tab:green",
+                 "lammps-body": "tab:red"}
 SEED_STYLES = ["-", "--", ":", "-."]
 
 

@@ -22,7 +22,7 @@ import jsonschema
 import yaml
 
 SCHEMA_DIR = Path(__file__).resolve().parent / "schemas"
-ENGINES = ("pysim", "lammps", "liggghts")
+ENGINES = ("pysim", "lammps", "lammps-body", "liggghts")
 #: RSA saturates near 0.38 for spheres; insertion is refused above this
 PHI_INSERT_MAX = 0.35
 #: memory per particle (or glued sphere) of a run and its analysis, bytes
@@ -472,13 +472,13 @@ def _check_engines(config: dict, source: str):
     is a broken set-up); LIGGGHTS may be missing (its runs are skipped with a message)
     unless ``engines.liggghts.required`` is true."""
     requested = {e for s in config["studies"].values() for e in s["engines"]}
-    if "lammps" in requested:
+    if requested & {"lammps", "lammps-body"}:
         from workflows.engines import EngineError, venv_bin
 
         try:
             venv_bin("lmp")
         except EngineError as exc:
-            raise ConfigError(f"{source}: engine 'lammps' is requested but {exc}") from None
+            raise ConfigError(f"{source}: LAMMPS is requested but {exc}") from None
     lig = config.get("engines", {}).get("liggghts", {})
     if "liggghts" in requested and lig.get("required") and not engine_available("liggghts"):
         raise ConfigError(f"{source}: engines.liggghts.required is true but the 'liggghts' binary "

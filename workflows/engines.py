@@ -50,6 +50,12 @@ def supports(engine: str, case: dict) -> str | None:
                 f"{case['contact']['spine_contact']} is pysim's)")
     k = kind(case)
     name = case["protocol"]["name"]
+    if engine == "lammps-body":
+        if k != "2d" or name != "compress":
+            return ("lammps-body runs 2-D compression only (body rounded/polygon); there is no "
+                    "deck for 3-D body rods (rounded/polyhedron) or other protocols")
+        if case["particles"].get("aspect_ratio", 0.0) <= 0:
+            return "lammps-body is for rods (aspect_ratio > 0); disks run on 'lammps'"
     if name == "tapping":
         if engine == "liggghts":
             return ("no LIGGGHTS tapping deck yet (it needs multisphere rods on a moving mesh "
@@ -67,7 +73,7 @@ def supports(engine: str, case: dict) -> str | None:
         return (f"{engine} runs only the 'compress', 'tapping' and 'deposit' protocols here, "
                 f"not '{name}'")
     if k == "2d":
-        if engine != "lammps":
+        if engine not in ("lammps", "lammps-body"):
             return f"{engine} has no 2-D deck"
         if case["contact"]["law"] != "harmonic" or case["contact"].get("friction", 0.0) > 0:
             return ("the LAMMPS 2-D deck implements the frictionless soft harmonic law only "
@@ -88,6 +94,8 @@ def deck(engine: str, case: dict) -> Path:
     reason = supports(engine, case)
     if reason:
         raise EngineError(reason)
+    if engine == "lammps-body":
+        return INPUTS / "lammps" / "in.2d.body.compress"
     return INPUTS / engine / f"in.{kind(case)}.{DECK_SUFFIX[case['protocol']['name']]}"
 
 
@@ -226,7 +234,12 @@ def deck_vars(case: dict, engine: str) -> dict[str, str]:
     if case["protocol"]["name"] == "deposit":
         return deposit_deck_vars(case)
     if kind(case) == "2d":
-        return deck_vars_2d(case)
+        v = deck_vars_2d(case)
+        if engine == "lammps-body":  # one body per rod: no disks, no ghost cutoff, masses
+            for key in ("disks", "rho_disk", "ghost_cut"):
+                v.pop(key)
+            v["m_small"] = repr(RHO_2D * float(v["a_small"]))
+        return v
     c, pr = case["contact"], case["protocol"]
     out = case.get("output", {})
     v = {
@@ -272,7 +285,7 @@ def command(engine: str, data: Path, outdir: Path, case: dict, ranks: int = 1,
         args += ["-var", k, str(val)]
     args += ["-var", "data", str(data), "-var", "outdir", str(outdir)]
     path = deck(engine, case)
-    if engine == "lammps":
+    if engine in ("lammps", "lammps-body"):
         exe = [venv_bin("lmp")]
         if ranks > 1:
             exe = [venv_bin("mpiexec"), "-n", str(ranks)] + exe
@@ -285,12 +298,12 @@ def command(engine: str, data: Path, outdir: Path, case: dict, ranks: int = 1,
         if ranks > 1:
             pre = [shutil.which("mpirun") or "mpirun", "--allow-run-as-root", "-np", str(ranks)]
         return pre + [exe, "-in", str(path), "-log", str(outdir / "log.liggghts")] + args
-    raise ValueError(f"unknown engine {engine!r}; valid: lammps, liggghts")
+    raise ValueError(f"unknown engine {engine!r}; valid: lammps, lammps-body, liggghts")
 
 
 def engine_version(engine: str, screen: str) -> str:
     """Version line the engine printed first (``LAMMPS (22 Jul 2025 - Update 4)``)."""
-    pat = r"^(LAMMPS \(.*\))" if engine == "lammps" else r"^(LIGGGHTS \(.*?\))"
+    pat = r"^(LAMMPS \(.*\))" if engine.startswith("lammps") else r"^(LIGGGHTS \(.*?\))"
     m = re.search(pat, screen, re.M)
     return m.group(1) if m else "unknown"
 
@@ -325,7 +338,8 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     stamp = resume_stamp(engine, case, data)
     same = work.exists() and (work / "resume.json").exists() and \
         json.loads((work / "resume.json").read_text()) == stamp
-    restart = latest_restart(work) if engine == "lammps" and same else None
+    lammps = engine in ("lammps", "lammps-body")
+    restart = latest_restart(work) if lammps and same else None
     if restart is not None:
         step = int(restart.name.split(".")[-1])
         cut_outputs(work, step)
@@ -338,10 +352,16 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
             shutil.rmtree(work)
         work.mkdir(parents=True)
         io.atomic_write_text(work / "resume.json", json.dumps(stamp))
-    if engine == "lammps":
+    if lammps:
         extra["restart_every"] = restart_interval(case)
     engine_data = Path(data).resolve()
-    glued = kind(case) in ("rods", "2d")
+    body = engine == "lammps-body"
+    glued = kind(case) in ("rods", "2d") and not body
+    if body:
+        engine_data = (work / "bodies.data").resolve()
+        if restart is None or not engine_data.exists():
+            (work / "arods.txt").write_text(repr(write_body_data_2d(data, engine_data, case)))
+        extra["arods"] = (work / "arods.txt").read_text().strip()
     if glued:
         engine_data = (work / "glued.data").resolve()
         if restart is None or not engine_data.exists():
@@ -377,7 +397,12 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     particles = work / "particles.dump"
     if engine == "liggghts":
         restore_box_precision(particles, work / "box.dat", data)
-    if glued:
+    if body:
+        stats = convert_body_rods_2d(work / "vertices.native", particles, data,
+                                     float(case["contact"]["k_n"]), work / "contacts.dump",
+                                     work / "rods.dump")
+        os.replace(work / "rods.dump", particles)
+    elif glued:
         stats = convert_glued_rods(work / "contacts.native", particles, work / "contacts.dump",
                                    work / "rods.dump")
         os.replace(work / "rods.dump", particles)
@@ -397,6 +422,9 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
             "wall_seconds": wall, "steps": steps,
             "particle_steps_per_second": n * steps / wall if wall > 0 else float("nan"),
             "contacts_dropped": stats["dropped"], "status": "ok",
+            **({"contact_forces": "reconstructed from the overlaps with the harmonic law "
+                                  "(no per-contact output for LAMMPS body particles)"}
+               if body else {}),
             "resumed_from": extra.get("restart_file")}
 
 
@@ -704,3 +732,122 @@ def convert_liggghts_contacts(native: Path, particles: Path, out: Path) -> dict:
         return t[:, 6], t[:, 7], t[:, 9:12]
 
     return _write_converted(native, particles, out, columns_of)
+
+
+# -- LAMMPS body rods (2-D, body rounded/polygon) ----------------------------------------------
+def write_body_data_2d(init_path, out_path, case: dict) -> float:
+    """Write the rods of a 2-D initial configuration as LAMMPS ``body rounded/polygon``
+    particles (``in.2d.body.compress``) and return their total area.
+
+    Each rod is one body: two vertices at the spine ends ``x +- (L/2) u`` (one vertex for
+    a disk), rounded diameter ``D``, mass ``rho A`` with ``rho = RHO_2D`` per area and the
+    lab-frame inertia tensor of the stadium lamina (:func:`pysim.state.inertia_2d` about
+    the normal; about the spine ``rho (4 A R^3/3 + pi R^4/4)`` with ``A = L/2``; the
+    in-plane perpendicular moment is the difference). Atom type 1 for the smallest
+    diameter, 2 for larger ones, as :func:`write_glued_data`.
+    """
+    from pysim.io import atomic_write_text, read_particle_data
+    from pysim.state import area, inertia_2d
+
+    d = read_particle_data(init_path)
+    n = len(d["ids"])
+    r = d["radius"]
+    length = d["length"]
+    small = float(r.min())
+    atoms, bodies = [], []
+    atot = 0.0
+    for i in range(n):
+        a_rod = float(area(r[i], length[i]))
+        atot += a_rod
+        m = RHO_2D * a_rod
+        i_z = float(inertia_2d(r[i], length[i], RHO_2D))
+        i_u = RHO_2D * (4.0 * (length[i] / 2) * r[i]**3 / 3 + np.pi * r[i]**4 / 4)
+        u = np.array([d["axis"][i][0], d["axis"][i][1], 0.0])
+        u /= np.linalg.norm(u)
+        w = np.array([-u[1], u[0], 0.0])
+        ez = np.array([0.0, 0.0, 1.0])
+        t = i_u * np.outer(u, u) + (i_z - i_u) * np.outer(w, w) + i_z * np.outer(ez, ez)
+        atype = 2 if r[i] > small * (1 + 1e-9) else 1
+        x = d["x"][i]
+        atoms.append(f"{d['ids'][i]} {atype} 1 {m:.16g} {x[0]:.16g} {x[1]:.16g} 0")
+        ends = [0.5 * length[i] * u, -0.5 * length[i] * u] if length[i] > 0 else [np.zeros(3)]
+        coords = " ".join(f"{c:.16g}" for e in ends for c in e)
+        inertia = " ".join(f"{v:.16g}" for v in (t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[0, 2],
+                                                  t[1, 2]))
+        bodies += [f"{d['ids'][i]} 1 {6 + 3 * len(ends) + 1}", str(len(ends)), inertia, coords,
+                   f"{2.0 * r[i]:.16g}"]
+    lo, hi = d["box_lo"].copy(), d["box_lo"] + d["box"]
+    lo[2], hi[2] = -0.5, 0.5
+    head = [f"# rodpack 2-D rods as body rounded/polygon ({n} bodies)", "", f"{n} atoms",
+            f"{n} bodies", "2 atom types", ""]
+    head += [f"{lo[a]:.16g} {hi[a]:.16g} {ax}lo {ax}hi" for a, ax in enumerate("xyz")]
+    text = "\n".join(head + ["", "Atoms # body", ""] + atoms + ["", "Bodies", ""] + bodies)
+    if np.any(d["v"] != 0.0):
+        text += "\n\nVelocities\n\n" + "\n".join(
+            f"{d['ids'][i]} {d['v'][i][0]:.16g} {d['v'][i][1]:.16g} 0 0 0 0" for i in range(n))
+    atomic_write_text(out_path, text + "\n")
+    return atot
+
+
+def convert_body_rods_2d(vertices: Path, particles: Path, data: Path, k_e: float,
+                         out_contacts: Path, out_particles: Path) -> dict:
+    """Output of ``in.2d.body.compress`` -> rods and contacts in the common format.
+
+    Each frame's body centres (``particles.dump``) and spine ends (``vertices.native``,
+    ``compute body/local``) become spherocylinders (axis and length from the two ends,
+    radius from the initial data). LAMMPS' body pair styles have no per-contact output,
+    so the contact table is geometric (:func:`analysis.contacts.geometric_contacts`) and
+    its forces are *reconstructed* from the overlaps with the closest-point harmonic law
+    ``F = k_e delta / d_ij^2`` (``d_ij = R_i + R_j``): the pressure in ``thermo.dat`` is
+    LAMMPS' own virial, the contact forces are not.
+    """
+    from analysis.contacts import geometric_contacts
+    from analysis.frame import Frame
+    from pysim.io import read_particle_data
+
+    init = read_particle_data(data)
+    radius_of = {int(t): float(r) for t, r in zip(init["ids"], init["radius"])}
+    ends = {}
+    for step, _box, cols, table in _iter_local(vertices):
+        c = {name: k for k, name in enumerate(cols)}
+        ids = table[:, c["c_ends[1]"]].astype(np.int64)
+        xyz = table[:, [c["c_ends[2]"], c["c_ends[3]"], c["c_ends[4]"]]]
+        ends[step] = (ids, xyz)
+    with open(io.part_path(out_contacts), "w") as fc, open(io.part_path(out_particles), "w") as fp:
+        for step, bounds, periodic, cols, table in _iter_dump(particles):
+            if step not in ends:
+                raise EngineError(f"{vertices}: no spine ends at step {step} of {particles}")
+            c = {name: k for k, name in enumerate(cols)}
+            order = np.argsort(table[:, c["id"]], kind="stable")
+            ids = table[order, c["id"]].astype(np.int64)
+            x = table[order][:, [c["x"], c["y"], c["z"]]]
+            vid, vxyz = ends[step]
+            first, last = {}, {}
+            for k, t in enumerate(vid):
+                (last if int(t) in first else first)[int(t)] = vxyz[k]
+            axis = np.tile([1.0, 0.0, 0.0], (len(ids), 1))
+            length = np.zeros(len(ids))
+            for k, t in enumerate(ids):
+                if int(t) in last:
+                    seg = last[int(t)] - first[int(t)]
+                    length[k] = float(np.linalg.norm(seg))
+                    axis[k] = seg / length[k]
+            radius = np.array([radius_of[int(t)] for t in ids])
+            lo, box = bounds[:, 0], bounds[:, 1] - bounds[:, 0]
+            fr = Frame(step=step, ids=ids, types=table[order, c["type"]].astype(np.int64),
+                       x=x, radius=radius, axis=axis, length=length, box_lo=lo, box=box,
+                       periodic=np.asarray(periodic, dtype=bool), dimension=2)
+            con = geometric_contacts(fr)
+            index = {int(t): k for k, t in enumerate(ids)}
+            a = np.array([index[int(t)] for t in con.i], dtype=np.int64)
+            b = np.array([index[int(t)] for t in con.j], dtype=np.int64)
+            d_ij = radius[a] + radius[b] if len(a) else np.zeros(0)
+            force = -(k_e * con.overlap / d_ij**2)[:, None] * con.normal
+            io.write_particles_frame(fp, step, box, fr.periodic, ids, fr.types, x, radius,
+                                     axis=axis, length=length, box_lo=lo)
+            rec = np.column_stack([con.point, con.normal, con.overlap, force])
+            io.write_contacts_frame(fc, step, box, fr.periodic, np.column_stack([con.i, con.j]),
+                                    rec, box_lo=lo)
+    io.finalize(out_contacts)
+    io.finalize(out_particles)
+    return {"dropped": 0}

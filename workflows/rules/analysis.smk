@@ -23,7 +23,7 @@ rule analyse_run:
         window=lambda wc: " ".join(map(str, _window(wc))),
         parameters=_parameters,
     wildcard_constraints:
-        engine="pysim|lammps|liggghts",
+        engine="pysim|lammps|lammps-body|liggghts",
     shell:
         "{PYTHON} -m workflows.scripts.analyse_run --case {input.case} --run {params.run}"
         " --study {wildcards.study} --variant {wildcards.variant} --seed {wildcards.seed}"

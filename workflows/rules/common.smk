@@ -49,7 +49,7 @@ def study_variants():
 
 def get_final_output():
     out = [f"{RESULTS}/summary.csv", f"{RESULTS}/comparison.csv", f"{RESULTS}/failures.csv"]
-    if any(r.engine == "lammps" and CFG["_cases"][(r.study, r.variant, r.seed)]["particles"]
+    if any(r.engine.startswith("lammps") and CFG["_cases"][(r.study, r.variant, r.seed)]["particles"]
            ["aspect_ratio"] > 0 for r in RUNS):
         out.append(f"{RESULTS}/body_check/body_check.png")  # rods on LAMMPS: check its bodies
     protocol = {s: st["case"]["protocol"]["name"] for s, st in CFG["studies"].items()}

@@ -23,7 +23,7 @@ rule run_engine:
         out=f"{RUN}/{{engine}}",
         timeout=lambda wc: engine_setting(wc.engine, "timeout", 3600),
     wildcard_constraints:
-        engine="pysim|lammps|liggghts",
+        engine="pysim|lammps|lammps-body|liggghts",
     threads: _threads
     shell:
         "{PYTHON} -m workflows.scripts.run_engine --engine {wildcards.engine}"

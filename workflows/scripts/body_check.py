@@ -26,29 +26,41 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     df = check(a.alpha, a.work)
     atomic_write_text(a.table, df.to_csv(index=False))
-    geoms = list(dict.fromkeys(df.geometry))
-    fig, ax = plt.subplots(figsize=(7.5, 3.6))
-    colors = {"lammps-body": ENGINE_COLORS["lammps"], "pysim": ENGINE_COLORS["pysim"]}
-    for k, (engine, g) in enumerate(df.groupby("engine", sort=False)):
-        g = g.set_index("geometry").reindex(geoms)
-        x = np.arange(len(geoms)) + (k - 0.5) * 0.35
-        ratio = g.ke_ratio.to_numpy(dtype=float)
-        ax.bar(x, np.where(np.isfinite(ratio), ratio, 0.0), width=0.35, label=engine,
-               color=colors.get(engine, "grey"))
-        for xi, (r, row) in zip(x, g.iterrows()):
-            note = "NaN" if not row.finite else ("passed\nthrough" if row.passed_through else "")
-            if note:
-                ax.text(xi, 0.05, note, ha="center", va="bottom", fontsize=7, rotation=90)
-    ax.axhline(1.0, color="k", lw=0.8, ls=":")
-    ax.set_xticks(np.arange(len(geoms)), geoms, fontsize=8)
-    ax.set_ylabel("kinetic energy after / before")
-    ax.set_title(f"elastic two-rod collisions, alpha = {a.alpha:g} (must be 1, and bounce)",
-                 fontsize=9)
-    ax.legend(fontsize=8)
+    colors = {"lammps-body": ENGINE_COLORS["lammps-body"], "pysim": ENGINE_COLORS["pysim"],
+              "lammps-body-bare-skin": "tab:gray"}
+    dims = sorted(df.dimension.unique(), reverse=True)
+    fig, axes = plt.subplots(1, len(dims), figsize=(5.0 * len(dims), 3.8), squeeze=False)
+    for ax, dim in zip(axes[0], dims):
+        sub = df[df.dimension == dim]
+        geoms = list(dict.fromkeys(sub.geometry))
+        groups = list(sub.groupby("engine", sort=False))
+        width = 0.8 / len(groups)
+        for k, (engine, g) in enumerate(groups):
+            g = g.set_index("geometry").reindex(geoms)
+            x = np.arange(len(geoms)) + (k - (len(groups) - 1) / 2) * width
+            ratio = g.ke_ratio.to_numpy(dtype=float)
+            ax.bar(x, np.where(np.isfinite(ratio), ratio, 0.0), width=width, label=engine,
+                   color=colors.get(engine, "grey"))
+            for xi, (_r, row) in zip(x, g.iterrows()):
+                note = "NaN" if not row.finite else ("passed\nthrough" if row.passed_through
+                                                     else "")
+                if note:
+                    ax.text(xi, 0.05, note, ha="center", va="bottom", fontsize=7, rotation=90)
+        ax.axhline(1.0, color="k", lw=0.8, ls=":")
+        ax.set_xticks(np.arange(len(geoms)), geoms, fontsize=8, rotation=20)
+        ax.set_ylabel("kinetic energy after / before")
+        style = "rounded/polyhedron" if dim == 3 else "rounded/polygon"
+        ax.set_title(f"{dim}-D, body {style}: elastic collisions, alpha = {a.alpha:g}\n"
+                     "(must be 1, and bounce)", fontsize=9)
+        ax.legend(fontsize=7)
     _save(fig, a.figure)
-    bad = df[(df.engine == "lammps-body") & (df.verdict != "ok")]
-    print(f"LAMMPS body rods wrong in {len(bad)} of {len(geoms)} geometries: "
-          f"{', '.join(bad.geometry)}", file=sys.stderr)
+    for dim in dims:
+        sub = df[df.dimension == dim]
+        for engine in [e for e in dict.fromkeys(sub.engine) if e.startswith("lammps")]:
+            bad = sub[(sub.engine == engine) & (sub.verdict != "ok")]
+            print(f"{dim}-D {engine}: wrong in {len(bad)} of {len(sub[sub.engine == engine])} "
+                  f"geometries{': ' if len(bad) else ''}{', '.join(bad.geometry)}",
+                  file=sys.stderr)
     return 0
 
 

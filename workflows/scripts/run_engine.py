@@ -11,7 +11,7 @@ from workflows.case import ConfigError
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--engine", required=True, choices=["pysim", "lammps", "liggghts"])
+    ap.add_argument("--engine", required=True, choices=["pysim", "lammps", "lammps-body", "liggghts"])
     ap.add_argument("--case", required=True, type=Path)
     ap.add_argument("--data", required=True, type=Path)
     ap.add_argument("--out", required=True, type=Path)
