@@ -93,6 +93,28 @@ def contact_types(frame: Frame, contacts: Contacts, tol: float = 1e-6) -> np.nda
     return side  # 0 tips -> tip-tip, 1 side -> tip-side, 2 sides -> side-side
 
 
+def contact_angles(frame: Frame, contacts: Contacts) -> np.ndarray:
+    """Angle ``varphi`` (rad, in ``[0, pi/2]``) of each contact around each particle it
+    touches, measured from the spine: ``cos varphi = |(p - x_i) . u_i| / |p - x_i|`` for
+    the contact point ``p`` and the centre ``x_i`` (minimum image), both ends of every
+    particle-particle contact (2 C values; wall rows are left out). The spine's two
+    directions and its two sides are equivalent, hence the folding to a quarter turn.
+    Isotropic contacts on disks or spheres give ``P(varphi) = 2/pi`` (2-D) and
+    ``sin varphi`` (3-D); on a rod, points on the flat sides lie above the cap-side
+    junction ``varphi_c = arctan(2R/L)`` and cap points below it (up to the overlap).
+    """
+    pp, _walls = split_wall_contacts(frame, contacts)
+    a = frame.index_of(pp.i)
+    b = frame.index_of(pp.j)
+    rows = np.concatenate([a, b])
+    point = np.concatenate([pp.point, pp.point])
+    rel = frame.minimum_image(point - frame.x[rows])
+    norm = np.linalg.norm(rel, axis=1)
+    along = np.abs(np.sum(rel * frame.axis[rows], axis=1))
+    cos = np.divide(along, norm, out=np.ones_like(norm), where=norm > 0)
+    return np.arccos(np.clip(cos, 0.0, 1.0))
+
+
 def parallel_side_contacts(frame: Frame, contacts: Contacts, angle_tol: float = 1e-6,
                            tol: float = 1e-6) -> np.ndarray:
     """Side-side contacts of parallel spines (|u_i x u_j| < sin(angle_tol)), (C,) bool."""

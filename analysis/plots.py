@@ -325,3 +325,32 @@ def deposit_profiles(runs, out):
     fig.suptitle("deposits: profiles versus depth (solid pysim, dashed LAMMPS)", fontsize=9)
     fig.tight_layout()
     _save(fig, out)
+
+
+def contact_angle_distributions(groups, out, bins: int = 30):
+    """``P(varphi)`` of the contact angle around the particle
+    (:func:`analysis.contacts.contact_angles`), one panel per variant, engines overlaid.
+
+    ``groups``: ``[(title, junction, {engine: angles (rad)})]`` with ``junction`` the
+    cap-side angle ``arctan(2R/L)`` (drawn dotted; ``None`` for disks). The dashed line
+    is ``2/pi``, isotropic contacts on disks.
+    """
+    n = max(len(groups), 1)
+    fig, axes = plt.subplots(1, n, figsize=(3.6 * n, 3.2), squeeze=False, sharey=True)
+    edges = np.linspace(0.0, np.pi / 2, bins + 1)
+    for ax, (title, junction, by_engine) in zip(axes[0], groups):
+        for engine, angles in by_engine.items():
+            if len(angles):
+                ax.hist(angles, bins=edges, density=True, histtype="step", lw=1.4,
+                        color=ENGINE_COLORS.get(engine, "k"), label=f"{engine} ({len(angles)})")
+        ax.axhline(2 / np.pi, color="grey", lw=0.8, ls="--")
+        if junction is not None:
+            ax.axvline(junction, color="grey", lw=0.8, ls=":")
+        ax.set_xlim(0, np.pi / 2)
+        ax.set_xticks([0, np.pi / 8, np.pi / 4, 3 * np.pi / 8, np.pi / 2],
+                      ["0", "π/8", "π/4", "3π/8", "π/2"])
+        ax.set_xlabel("contact angle from the spine, varphi")
+        ax.set_title(title, fontsize=9)
+        ax.legend(fontsize=7)
+    axes[0, 0].set_ylabel("P(varphi)")
+    _save(fig, out)

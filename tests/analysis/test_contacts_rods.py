@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from analysis.contacts import (SIDE_SIDE, TIP_SIDE, TIP_TIP, ContactNumber, ContactTypes,
-                               contact_types, geometric_contacts, glued_bodies,
+                               contact_angles, contact_types, geometric_contacts, glued_bodies,
                                merge_glued_contacts, remove_rattlers_2d)
 from analysis.frame import Contacts
 from analysis.theory import isostatic_z
@@ -287,3 +287,41 @@ def test_automatic_rattler_rule_follows_the_frame():
     only_sides = cf.subset(contact_types(flat, cf) == SIDE_SIDE)  # above and below: kept
     assert ContactNumber().compute(flat, only_sides).n_rattlers == 0
     assert ContactNumber(c_min=3).compute(flat, only_sides).n_rattlers == flat.n
+
+
+def _table(i, j, points):
+    points = np.asarray(points, dtype=float)
+    c = len(points)
+    return Contacts(0, np.asarray(i), np.asarray(j), points, np.tile([1.0, 0, 0], (c, 1)),
+                    np.zeros(c), np.zeros((c, 3)))
+
+
+def test_contact_angles_around_a_rod():
+    # rod 1 along x (L = 2, R = 0.5) at (5, 5); disk 2 far away (only its id is needed);
+    # a point at the tip, one on the flat side, one on the cap at 45 degrees, one beyond
+    # the periodic face, and a point at the cap-side junction
+    fr = frame_of([[5.0, 5.0, 0.0], [1.0, 1.0, 0.0]], [0.5, 0.5], [10.0, 10.0],
+                  axis=[[1.0, 0, 0], [1.0, 0, 0]], length=[2.0, 0.0], dimension=2)
+    h = 0.5 / np.sqrt(2.0)
+    pts = [[6.5, 5.0, 0], [5.3, 5.5, 0], [6.0 + h, 5.0 - h, 0], [5.0 - 1.5 + 10.0, 5.0, 0],
+           [6.0, 4.5, 0]]
+    phi = contact_angles(fr, _table([1] * 5, [2] * 5, pts))
+    np.testing.assert_allclose(phi[:5], [0.0, np.arctan2(0.5, 0.3), np.arctan2(h, 1.0 + h),
+                                         0.0, np.arctan(2 * 0.5 / 2.0)], atol=1e-12)
+    assert phi.shape == (10,) and np.all((phi >= 0) & (phi <= np.pi / 2))
+
+
+def test_contact_angles_of_isotropic_contacts_on_disks(rng):
+    # random points on disk surfaces: P(varphi) = 2/pi, so the mean is pi/4 and the
+    # fraction below pi/6 is 1/3 (binomial error about 0.003 for 20000 values)
+    n = 200
+    x = rng.uniform(0, 20.0, size=(n, 3))
+    x[:, 2] = 0
+    fr = frame_of(x, 0.5, [20.0, 20.0], axis=random_unit(rng, n, dim=2), dimension=2)
+    i = rng.integers(1, n + 1, 10000)
+    j = (i % n) + 1
+    th = rng.uniform(0, 2 * np.pi, 10000)
+    pts = x[i - 1] + 0.5 * np.column_stack([np.cos(th), np.sin(th), np.zeros_like(th)])
+    phi = contact_angles(fr, _table(i, j, pts))[:10000]
+    assert phi.mean() == pytest.approx(np.pi / 4, abs=0.01)
+    assert np.mean(phi < np.pi / 6) == pytest.approx(1 / 3, abs=0.012)

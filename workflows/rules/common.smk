@@ -62,6 +62,10 @@ def get_final_output():
             out.append(f"{RESULTS}/{study}/figures/deposit.png")
         elif varying_parameters(CFG, study):
             out.append(f"{RESULTS}/{study}/figures/trends.png")
+        cases = [c for k, c in CFG["_cases"].items() if k[0] == study]
+        if any(c["particles"].get("dimension", 3) == 2 and c["particles"]["aspect_ratio"] > 0
+               for c in cases) and study not in tapping | deposit:
+            out.append(f"{RESULTS}/{study}/figures/contact_angles.png")  # 2-D rods: P(varphi)
     for study, variant in study_variants():
         if study in deposit:
             continue

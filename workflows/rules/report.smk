@@ -74,6 +74,25 @@ rule plot_trends:
         " --parameter {params.parameter} --dimension {params.dimension} --out {output} 2> {log}"
 
 
+rule plot_angles:
+    input:
+        lambda wc: [
+            f"{d}/{name}" for d in run_dirs(wc.study) for name in ("observables.csv", "run.json")
+        ],
+    output:
+        report(
+            f"{RESULTS}/{{study}}/figures/contact_angles.png",
+            caption="../report/contact_angles.rst",
+            category="{study}",
+        ),
+    log:
+        f"{RESULTS}/{{study}}/figures/contact_angles.log",
+    params:
+        runs=lambda wc: " ".join(run_dirs(wc.study)),
+    shell:
+        "{PYTHON} -m workflows.scripts.plot_angles --runs {params.runs} --out {output} 2> {log}"
+
+
 rule body_check:
     output:
         table=report(
