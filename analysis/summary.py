@@ -52,21 +52,30 @@ def frame_curves(run: RunData, c_min: int | None = None) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def analyse_compression(run_dir, window, p_scale: float, c_min: int | None = None):
+def analyse_compression(run_dir, window, p_scale: float, c_min: int | None = None,
+                        fit_from: float | None = None):
     """Observables ``[(name, value, uncertainty)]`` and per-frame curves of one
     compression run.
 
     ``window`` is the jamming-fit pressure window in units of ``p_scale`` (``k_n/D``);
-    ``c_min`` overrides the rattler rule (default: science.md's rule for the frame).
+    ``c_min`` overrides the rattler rule (default: science.md's rule for the frame);
+    ``fit_from``: only thermo rows from the first with ``phi >= fit_from`` on are fitted
+    (the slow stage of a two-stage compression: the fast stage's transient pressure is
+    not a jamming rise).
     """
     run = RunData(run_dir)
     thermo = run.thermo
     rows = []
     curves = frame_curves(run, c_min)
+    first = 0
+    if fit_from is not None:
+        reached = np.flatnonzero(thermo.phi.to_numpy() >= fit_from)
+        first = int(reached[0]) if len(reached) else len(thermo)
     try:
-        jp = JammingPoint(window, p_scale).compute(thermo.phi.to_numpy(), thermo.pressure.to_numpy())
+        jp = JammingPoint(window, p_scale).compute(thermo.phi.to_numpy()[first:],
+                                                   thermo.pressure.to_numpy()[first:])
         phi_j, phi_j_err, slope = jp.phi_j, jp.phi_j_err, jp.slope
-        fit = {"rows": (jp.rows.start, jp.rows.stop)}
+        fit = {"rows": (first + jp.rows.start, first + jp.rows.stop)}
     except JammingFitError as exc:
         phi_j, phi_j_err, slope, fit = np.nan, np.nan, np.nan, {"error": str(exc)}
     rows += [("phi_j", phi_j, phi_j_err), ("jamming_slope", slope, np.nan)]

@@ -30,3 +30,35 @@ def test_no_rise_is_a_clear_error():
         first_rise(np.zeros(10), 1e-3, 1e-2)
     with pytest.raises(ValueError, match="0 < p_lo < p_hi"):
         JammingPoint(window=(1e-2, 1e-3))
+
+
+def test_two_stage_compression_fits_the_slow_stage_only(tmp_path, rng):
+    """A fast stage that overshoots (its pressure crosses the whole fit window) must not be
+    fitted: with ``fit_from = phi_fast`` the rise of the slow stage gives phi_J."""
+    from analysis.summary import analyse_compression
+    from pysim import io
+
+    fast = np.linspace(0.40, 0.80, 200)
+    p_fast = 0.05 * np.exp(-((fast - 0.75) / 0.03) ** 2)  # transient jamming
+    slow = np.linspace(0.80, 0.90, 300)
+    p_slow = np.where(slow > 0.842, 0.33 * (slow - 0.842), 0.0) + rng.uniform(0, 1e-5, 300)
+    phi, p = np.concatenate([fast, slow]), np.concatenate([p_fast, p_slow])
+    with open(tmp_path / "thermo.dat", "w") as fh:
+        fh.write(io.thermo_header())
+        for k, (f, q) in enumerate(zip(phi, p)):
+            io.write_thermo_row(fh, (k * 100, k, f, q, 0.0, 0.0, 0))
+    x = rng.uniform(0, 10, (4, 3))
+    x[:, 2] = 0
+    with open(tmp_path / "particles.dump", "w") as fh:
+        io.write_particles_frame(fh, 0, np.array([10.0, 10.0, 0.0]), np.array([True] * 3),
+                                 np.arange(1, 5), np.ones(4, int), x, np.full(4, 0.5),
+                                 axis=np.tile([1.0, 0, 0], (4, 1)), length=np.zeros(4))
+    with open(tmp_path / "contacts.dump", "w") as fh:
+        io.write_contacts_frame(fh, 0, np.array([10.0, 10.0, 0.0]), np.array([True] * 3),
+                                np.zeros((0, 2), int), np.zeros((0, 10)))
+    window = (1e-3, 1e-2)
+    rows, _curves, _thermo = analyse_compression(tmp_path, window, 1.0, fit_from=0.80)
+    phi_j = dict((name, v) for name, v, _e in rows)["phi_j"]
+    assert phi_j == pytest.approx(0.842, abs=2e-3)
+    rows, _curves, _thermo = analyse_compression(tmp_path, window, 1.0)
+    assert dict((name, v) for name, v, _e in rows)["phi_j"] < 0.8  # the transient, fitted

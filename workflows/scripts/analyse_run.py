@@ -79,7 +79,10 @@ def main(argv=None) -> int:
         rows.append(("settled", float(settled) if settled is not None else float("nan"),
                      float("nan")))
     else:
-        rows, curves, _thermo = analyse_compression(a.run, a.window, p_scale)
+        pr = case["protocol"]
+        # fit the slow stage only: the fast stage may overshoot into transient jamming
+        fit_from = pr["phi_fast"] if pr.get("phi_fast", pr["phi_init"]) > pr["phi_init"] else None
+        rows, curves, _thermo = analyse_compression(a.run, a.window, p_scale, fit_from=fit_from)
     df = tidy(rows, a.study, a.variant, a.engine, a.seed, json.loads(a.parameters))
     for key in PROVENANCE:
         df[key] = record.get(key, "unknown")
