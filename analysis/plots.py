@@ -155,6 +155,8 @@ def trends(summary, parameter, observables, out, title=None, references=None):
             if keep.any():
                 ax.plot(np.asarray(x)[keep], np.asarray(y)[keep], "k--", lw=0.8, label=label)
         ax.set_xlabel(parameter)
+        if lo > 0 and hi / lo > 50:  # e.g. compression rates over decades
+            ax.set_xscale("log")
         ax.set_ylabel(o)
         ax.legend(fontsize=7)
     if title:
