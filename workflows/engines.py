@@ -51,11 +51,17 @@ def supports(engine: str, case: dict) -> str | None:
     k = kind(case)
     name = case["protocol"]["name"]
     if engine == "lammps-body":
-        if k != "2d" or name != "compress":
-            return ("lammps-body runs 2-D compression only (body rounded/polygon); there is no "
-                    "deck for 3-D body rods (rounded/polyhedron) or other protocols")
-        if case["particles"].get("aspect_ratio", 0.0) <= 0:
-            return "lammps-body is for rods (aspect_ratio > 0); disks run on 'lammps'"
+        if name != "compress":
+            return f"lammps-body runs the 'compress' protocol only, not '{name}'"
+        if k == "spheres" or case["particles"].get("aspect_ratio", 0.0) <= 0:
+            return "lammps-body is for rods (aspect_ratio > 0); spheres and disks run on 'lammps'"
+        if k == "rods":
+            c = case["contact"]
+            if c["law"] != "hooke" or c.get("friction", 0.0) > 0:
+                return ("the lammps-body 3-D deck implements the frictionless linear law only "
+                        f"(got law {c['law']}, friction {c.get('friction', 0.0)})")
+            if "pressure_final" in case["protocol"]:
+                return "the lammps-body 3-D deck has no pressure_final stop"
     if name == "tapping":
         if engine == "liggghts":
             return ("no LIGGGHTS tapping deck yet (it needs multisphere rods on a moving mesh "
@@ -95,7 +101,7 @@ def deck(engine: str, case: dict) -> Path:
     if reason:
         raise EngineError(reason)
     if engine == "lammps-body":
-        return INPUTS / "lammps" / "in.2d.body.compress"
+        return INPUTS / "lammps" / f"in.{'2d' if kind(case) == '2d' else 'rods'}.body.compress"
     return INPUTS / engine / f"in.{kind(case)}.{DECK_SUFFIX[case['protocol']['name']]}"
 
 
@@ -254,7 +260,13 @@ def deck_vars(case: dict, engine: str) -> dict[str, str]:
         v["phi_fast"], v["rate_fast"] = pr["phi_init"], 1.0
     if "pressure_final" in pr:
         v["p_final"] = pr["pressure_final"]
-    if kind(case) == "rods":
+    if kind(case) == "rods" and engine == "lammps-body":  # one body per rod
+        from workflows.case import size_extremes
+
+        for key in ("mu", "k_t"):
+            v.pop(key)
+        v["d_max"] = size_extremes(case["particles"]["diameter"])[2]
+    elif kind(case) == "rods":
         v.update(_rod_vars(case))
         for key in ("mu", "k_t"):
             v.pop(key)
@@ -360,8 +372,9 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     if body:
         engine_data = (work / "bodies.data").resolve()
         if restart is None or not engine_data.exists():
-            (work / "arods.txt").write_text(repr(write_body_data_2d(data, engine_data, case)))
-        extra["arods"] = (work / "arods.txt").read_text().strip()
+            (work / "measure.txt").write_text(repr(write_body_data(data, engine_data, case)))
+        extra["arods" if kind(case) == "2d" else "vrods"] = \
+            (work / "measure.txt").read_text().strip()
     if glued:
         engine_data = (work / "glued.data").resolve()
         if restart is None or not engine_data.exists():
@@ -398,9 +411,10 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     if engine == "liggghts":
         restore_box_precision(particles, work / "box.dat", data)
     if body:
-        stats = convert_body_rods_2d(work / "vertices.native", particles, data,
-                                     float(case["contact"]["k_n"]), work / "contacts.dump",
-                                     work / "rods.dump")
+        law = ("harmonic" if kind(case) == "2d" else "hooke", float(case["contact"]["k_n"]))
+        stats = convert_body_rods(work / "vertices.native", particles, data, law,
+                                  work / "contacts.dump", work / "rods.dump",
+                                  2 if kind(case) == "2d" else 3)
         os.replace(work / "rods.dump", particles)
     elif glued:
         stats = convert_glued_rods(work / "contacts.native", particles, work / "contacts.dump",
@@ -422,7 +436,7 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
             "wall_seconds": wall, "steps": steps,
             "particle_steps_per_second": n * steps / wall if wall > 0 else float("nan"),
             "contacts_dropped": stats["dropped"], "status": "ok",
-            **({"contact_forces": "reconstructed from the overlaps with the harmonic law "
+            **({"contact_forces": "reconstructed from the overlaps with the contact law "
                                   "(no per-contact output for LAMMPS body particles)"}
                if body else {}),
             "resumed_from": extra.get("restart_file")}
@@ -735,71 +749,90 @@ def convert_liggghts_contacts(native: Path, particles: Path, out: Path) -> dict:
 
 
 # -- LAMMPS body rods (2-D, body rounded/polygon) ----------------------------------------------
-def write_body_data_2d(init_path, out_path, case: dict) -> float:
-    """Write the rods of a 2-D initial configuration as LAMMPS ``body rounded/polygon``
-    particles (``in.2d.body.compress``) and return their total area.
+def write_body_data(init_path, out_path, case: dict) -> float:
+    """Write the rods of an initial configuration as LAMMPS body particles and return
+    their total area (2-D, ``in.2d.body.compress``) or volume (3-D,
+    ``in.rods.body.compress``).
 
     Each rod is one body: two vertices at the spine ends ``x +- (L/2) u`` (one vertex for
-    a disk), rounded diameter ``D``, mass ``rho A`` with ``rho = RHO_2D`` per area and the
-    lab-frame inertia tensor of the stadium lamina (:func:`pysim.state.inertia_2d` about
-    the normal; about the spine ``rho (4 A R^3/3 + pi R^4/4)`` with ``A = L/2``; the
-    in-plane perpendicular moment is the difference). Atom type 1 for the smallest
-    diameter, 2 for larger ones, as :func:`write_glued_data`.
+    a sphere or disk) and rounded diameter ``D``. 2-D: ``body rounded/polygon`` of mass
+    ``rho A`` with ``rho = RHO_2D`` per area and the lab-frame inertia tensor of the
+    stadium lamina (:func:`pysim.state.inertia_2d` about the normal; about the spine
+    ``rho (4 A R^3/3 + pi R^4/4)`` with ``A = L/2``; the in-plane perpendicular moment is
+    the difference); atom type 1 for the smallest diameter, 2 for larger ones, as
+    :func:`write_glued_data`. 3-D: ``body rounded/polyhedron`` (integers ``2 1 0``) of
+    mass ``rho V`` with the case's density and the solid spherocylinder's moments
+    (:func:`pysim.state.inertia_3d`), one atom type.
     """
     from pysim.io import atomic_write_text, read_particle_data
-    from pysim.state import area, inertia_2d
+    from pysim.state import area, inertia_2d, inertia_3d, volume
 
+    two_d = case["particles"].get("dimension", 3) == 2
     d = read_particle_data(init_path)
     n = len(d["ids"])
     r = d["radius"]
     length = d["length"]
     small = float(r.min())
+    rho = RHO_2D if two_d else case["particles"].get("density", 1.0)
     atoms, bodies = [], []
-    atot = 0.0
+    total = 0.0
     for i in range(n):
-        a_rod = float(area(r[i], length[i]))
-        atot += a_rod
-        m = RHO_2D * a_rod
-        i_z = float(inertia_2d(r[i], length[i], RHO_2D))
-        i_u = RHO_2D * (4.0 * (length[i] / 2) * r[i]**3 / 3 + np.pi * r[i]**4 / 4)
-        u = np.array([d["axis"][i][0], d["axis"][i][1], 0.0])
+        u = np.array(d["axis"][i], dtype=float)
+        if two_d:
+            u[2] = 0.0
         u /= np.linalg.norm(u)
-        w = np.array([-u[1], u[0], 0.0])
-        ez = np.array([0.0, 0.0, 1.0])
-        t = i_u * np.outer(u, u) + (i_z - i_u) * np.outer(w, w) + i_z * np.outer(ez, ez)
-        atype = 2 if r[i] > small * (1 + 1e-9) else 1
+        if two_d:
+            measure = float(area(r[i], length[i]))
+            i_z = float(inertia_2d(r[i], length[i], rho))
+            i_u = rho * (4.0 * (length[i] / 2) * r[i]**3 / 3 + np.pi * r[i]**4 / 4)
+            w = np.array([-u[1], u[0], 0.0])
+            t = i_u * np.outer(u, u) + (i_z - i_u) * np.outer(w, w)
+            t[2, 2] = i_z
+        else:
+            measure = float(volume(r[i], length[i]))
+            i_perp, i_axis = (float(v) for v in inertia_3d(r[i], length[i], rho))
+            t = i_perp * np.eye(3) + (i_axis - i_perp) * np.outer(u, u)
+        total += measure
+        atype = 2 if two_d and r[i] > small * (1 + 1e-9) else 1
         x = d["x"][i]
-        atoms.append(f"{d['ids'][i]} {atype} 1 {m:.16g} {x[0]:.16g} {x[1]:.16g} 0")
+        z = 0.0 if two_d else x[2]
+        atoms.append(f"{d['ids'][i]} {atype} 1 {rho * measure:.16g} {x[0]:.16g} {x[1]:.16g} "
+                     f"{z:.16g}")
         ends = [0.5 * length[i] * u, -0.5 * length[i] * u] if length[i] > 0 else [np.zeros(3)]
         coords = " ".join(f"{c:.16g}" for e in ends for c in e)
         inertia = " ".join(f"{v:.16g}" for v in (t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[0, 2],
                                                   t[1, 2]))
-        bodies += [f"{d['ids'][i]} 1 {6 + 3 * len(ends) + 1}", str(len(ends)), inertia, coords,
-                   f"{2.0 * r[i]:.16g}"]
+        ints = str(len(ends)) if two_d else f"{len(ends)} {len(ends) - 1} 0"
+        bodies += [f"{d['ids'][i]} {1 if two_d else 3} {6 + 3 * len(ends) + 1}", ints, inertia,
+                   coords, f"{2.0 * r[i]:.16g}"]
     lo, hi = d["box_lo"].copy(), d["box_lo"] + d["box"]
-    lo[2], hi[2] = -0.5, 0.5
-    head = [f"# rodpack 2-D rods as body rounded/polygon ({n} bodies)", "", f"{n} atoms",
-            f"{n} bodies", "2 atom types", ""]
+    if two_d:
+        lo[2], hi[2] = -0.5, 0.5
+    style = "rounded/polygon" if two_d else "rounded/polyhedron"
+    head = [f"# rodpack rods as body {style} ({n} bodies)", "", f"{n} atoms", f"{n} bodies",
+            f"{2 if two_d else 1} atom types", ""]
     head += [f"{lo[a]:.16g} {hi[a]:.16g} {ax}lo {ax}hi" for a, ax in enumerate("xyz")]
     text = "\n".join(head + ["", "Atoms # body", ""] + atoms + ["", "Bodies", ""] + bodies)
     if np.any(d["v"] != 0.0):
         text += "\n\nVelocities\n\n" + "\n".join(
-            f"{d['ids'][i]} {d['v'][i][0]:.16g} {d['v'][i][1]:.16g} 0 0 0 0" for i in range(n))
+            f"{d['ids'][i]} {d['v'][i][0]:.16g} {d['v'][i][1]:.16g} "
+            f"{0.0 if two_d else d['v'][i][2]:.16g} 0 0 0" for i in range(n))
     atomic_write_text(out_path, text + "\n")
-    return atot
+    return total
 
 
-def convert_body_rods_2d(vertices: Path, particles: Path, data: Path, k_e: float,
-                         out_contacts: Path, out_particles: Path) -> dict:
-    """Output of ``in.2d.body.compress`` -> rods and contacts in the common format.
+def convert_body_rods(vertices: Path, particles: Path, data: Path, law: tuple,
+                      out_contacts: Path, out_particles: Path, dimension: int) -> dict:
+    """Output of the LAMMPS body decks -> rods and contacts in the common format.
 
     Each frame's body centres (``particles.dump``) and spine ends (``vertices.native``,
     ``compute body/local``) become spherocylinders (axis and length from the two ends,
     radius from the initial data). LAMMPS' body pair styles have no per-contact output,
     so the contact table is geometric (:func:`analysis.contacts.geometric_contacts`) and
-    its forces are *reconstructed* from the overlaps with the closest-point harmonic law
-    ``F = k_e delta / d_ij^2`` (``d_ij = R_i + R_j``): the pressure in ``thermo.dat`` is
-    LAMMPS' own virial, the contact forces are not.
+    its forces are *reconstructed* from the overlaps with the closest-point law
+    ``law``: ``("harmonic", k_e)`` for ``F = k_e delta / d_ij^2`` (``d_ij = R_i + R_j``)
+    or ``("hooke", k_n)`` for ``F = k_n delta`` (elastic part only): the pressure in
+    ``thermo.dat`` is LAMMPS' own virial, the contact forces are not.
     """
     from analysis.contacts import geometric_contacts
     from analysis.frame import Frame
@@ -836,13 +869,17 @@ def convert_body_rods_2d(vertices: Path, particles: Path, data: Path, k_e: float
             lo, box = bounds[:, 0], bounds[:, 1] - bounds[:, 0]
             fr = Frame(step=step, ids=ids, types=table[order, c["type"]].astype(np.int64),
                        x=x, radius=radius, axis=axis, length=length, box_lo=lo, box=box,
-                       periodic=np.asarray(periodic, dtype=bool), dimension=2)
+                       periodic=np.asarray(periodic, dtype=bool), dimension=dimension)
             con = geometric_contacts(fr)
             index = {int(t): k for k, t in enumerate(ids)}
             a = np.array([index[int(t)] for t in con.i], dtype=np.int64)
             b = np.array([index[int(t)] for t in con.j], dtype=np.int64)
-            d_ij = radius[a] + radius[b] if len(a) else np.zeros(0)
-            force = -(k_e * con.overlap / d_ij**2)[:, None] * con.normal
+            kind_of_law, k = law
+            if kind_of_law == "harmonic":
+                stiffness = k / (radius[a] + radius[b]) ** 2
+            else:
+                stiffness = np.full(len(a), float(k))
+            force = -(stiffness * con.overlap)[:, None] * con.normal
             io.write_particles_frame(fp, step, box, fr.periodic, ids, fr.types, x, radius,
                                      axis=axis, length=length, box_lo=lo)
             rec = np.column_stack([con.point, con.normal, con.overlap, force])

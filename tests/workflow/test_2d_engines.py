@@ -94,12 +94,9 @@ def test_lammps_body_refuses_what_it_has_no_deck_for():
     assert "disks run on 'lammps'" in engines.supports(
         "lammps-body", validate_case({**CASE, "particles": {**CASE["particles"],
                                                            "aspect_ratio": 0.0}}))
-    three_d = {**CASE, "particles": {"n": 64, "aspect_ratio": 1.0,
-                                     "diameter": {"distribution": "mono", "mean": 1.0}},
-               "protocol": {"name": "compress", "phi_init": 0.3, "rate": 1e-3,
-                            "phi_final": 0.5, "dt": 0.001}, "contact": {"law": "hooke",
-                                                                     "k_n": 1000.0}}
-    assert "2-D compression only" in engines.supports("lammps-body", validate_case(three_d))
+    jammed = {**CASE, "protocol": {"name": "jammed", "phi_init": 0.4, "rate": 1e-3,
+                                   "dt": 0.01}}
+    assert "'compress' protocol only" in engines.supports("lammps-body", validate_case(jammed))
 
 
 def test_lammps_2d_deck_refuses_other_laws():
