@@ -20,12 +20,18 @@ class JammingFitError(ValueError):
 def first_rise(p: np.ndarray, p_lo: float, p_hi: float) -> slice:
     """Rows of the first rise through ``[p_lo, p_hi]``.
 
-    It ends at the first row with ``p >= p_hi`` and starts after the last row before
-    it with ``p < p_lo``, so that pressure spikes of the unjammed, flowing state are
-    ignored.
+    A rise starts below ``p_lo``: rows before the first one with ``p < p_lo`` (a
+    pressure still relaxing from an earlier, faster stage) are skipped. It ends at the
+    first later row with ``p >= p_hi`` and starts after the last row before it with
+    ``p < p_lo``, so that pressure spikes of the unjammed, flowing state are ignored.
     """
     p = np.asarray(p, dtype=np.float64)
-    above = np.flatnonzero(p >= p_hi)
+    low = np.flatnonzero(p < p_lo)
+    if len(low) == 0:
+        raise JammingFitError(f"pressure is never below the bottom of the fit window "
+                              f"p_lo = {p_lo:.3g} (min {np.nanmin(p):.3g}): the run starts "
+                              "jammed; start below jamming or raise the window")
+    above = np.flatnonzero(p[low[0]:] >= p_hi) + low[0]
     if len(above) == 0:
         raise JammingFitError(f"pressure never reaches the top of the fit window "
                               f"p_hi = {p_hi:.3g} (max {np.nanmax(p):.3g}); compress further "

@@ -25,9 +25,22 @@ def test_pressure_scale_is_applied():
     assert jp.slope == pytest.approx(0.2 * 1e5)
 
 
+def test_a_pressure_still_relaxing_at_the_start_is_skipped():
+    # the slow stage of a two-stage compression starts with the fast stage's excess
+    # pressure (above the whole window), which relaxes before the jamming rise
+    phi = np.linspace(0.80, 0.90, 400)
+    p = 0.33 * np.clip(phi - 0.842, 0, None) + 8e-3 * np.exp(-(phi - 0.80) / 0.004)
+    rows = first_rise(p, 1e-3, 1e-2)
+    assert phi[rows.start] > 0.84
+    assert JammingPoint(window=(1e-3, 1e-2)).compute(phi, p).phi_j == pytest.approx(0.842,
+                                                                                    abs=1e-3)
+
+
 def test_no_rise_is_a_clear_error():
     with pytest.raises(JammingFitError, match="never reaches"):
         first_rise(np.zeros(10), 1e-3, 1e-2)
+    with pytest.raises(JammingFitError, match="starts jammed"):
+        first_rise(np.linspace(0.02, 0.05, 10), 1e-3, 1e-2)
     with pytest.raises(ValueError, match="0 < p_lo < p_hi"):
         JammingPoint(window=(1e-2, 1e-3))
 
