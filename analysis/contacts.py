@@ -97,17 +97,20 @@ def contact_angles(frame: Frame, contacts: Contacts) -> np.ndarray:
     """Angle ``varphi`` (rad, in ``[0, pi/2]``) of each contact around each particle it
     touches, measured from the spine: ``cos varphi = |(p - x_i) . u_i| / |p - x_i|`` for
     the contact point ``p`` and the centre ``x_i`` (minimum image), both ends of every
-    particle-particle contact (2 C values; wall rows are left out). The spine's two
-    directions and its two sides are equivalent, hence the folding to a quarter turn.
-    Isotropic contacts on disks or spheres give ``P(varphi) = 2/pi`` (2-D) and
-    ``sin varphi`` (3-D); on a rod, points on the flat sides lie above the cap-side
-    junction ``varphi_c = arctan(2R/L)`` and cap points below it (up to the overlap).
+    particle-particle contact that sits on a rod (``L > 0``; spheres and disks have no
+    spine and are left out, as are wall rows). The spine's two directions and its two
+    sides are equivalent, hence the folding to a quarter turn. Contacts spread evenly
+    around very short rods give ``P(varphi) = 2/pi`` (2-D) and ``sin varphi`` (3-D); on a
+    rod, points on the flat sides lie above the cap-side junction
+    ``varphi_c = arctan(2R/L)`` and cap points below it (up to the overlap).
     """
     pp, _walls = split_wall_contacts(frame, contacts)
     a = frame.index_of(pp.i)
     b = frame.index_of(pp.j)
     rows = np.concatenate([a, b])
     point = np.concatenate([pp.point, pp.point])
+    rod = frame.length[rows] > 0
+    rows, point = rows[rod], point[rod]
     rel = frame.minimum_image(point - frame.x[rows])
     norm = np.linalg.norm(rel, axis=1)
     along = np.abs(np.sum(rel * frame.axis[rows], axis=1))

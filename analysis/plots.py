@@ -138,7 +138,8 @@ def trends(summary, parameter, observables, out, title=None, references=None):
     """Observables versus a case parameter (e.g. ``alpha``), one panel each, engines
     overlaid: mean and standard deviation over seeds. ``references`` maps an observable
     to ``[(label, x (array), y (array))]`` curves drawn in black (theory)."""
-    obs = [o for o in observables if o in set(summary.observable)]
+    have = summary[np.isfinite(summary.value.astype(float))]
+    obs = [o for o in observables if o in set(have.observable)]
     if not obs or parameter not in summary.columns:
         message_figure(out, f"no {', '.join(observables)} versus {parameter} to draw")
         return
@@ -355,4 +356,40 @@ def contact_angle_distributions(groups, out, bins: int = 30):
         ax.set_title(title, fontsize=9)
         ax.legend(fontsize=7)
     axes[0, 0].set_ylabel("P(varphi)")
+    _save(fig, out)
+
+
+def pressure_by_variant(runs, out, p_scale=1.0, parameter=None):
+    """Contact pressure versus packing fraction of every run of a study on one log-scale
+    panel, coloured by variant (line style by engine): how ``p(phi)`` changes with the
+    varying parameter (e.g. the compression rate). ``runs``: dicts with ``variant``,
+    ``value`` (of ``parameter``, for the legend and the colour order), ``engine``,
+    ``seed``, ``thermo`` and optionally ``phi_j`` (a marker on the curve's axis)."""
+    order = sorted({(r["value"], r["variant"]) for r in runs}, key=lambda t: (str(type(t[0])), t))
+    cmap = plt.get_cmap("viridis", max(len(order), 2))
+    colour = {v: cmap(k) for k, (_val, v) in enumerate(order)}
+    styles = {"pysim": "-", "lammps": "--", "lammps-body": "-.", "liggghts": ":"}
+    fig, ax = plt.subplots(figsize=(6.8, 4.4))
+    seen = set()
+    for r in runs:
+        th = r["thermo"]
+        key = (r["variant"], r["engine"])
+        label = None
+        if key not in seen:
+            seen.add(key)
+            name = f"{parameter} = {r['value']:g}" if parameter else r["variant"]
+            label = f"{name} ({r['engine']})"
+        ax.semilogy(th.phi, np.clip(th.pressure / p_scale, 1e-9, None), lw=1.0,
+                    color=colour[r["variant"]], ls=styles.get(r["engine"], "-"), label=label)
+        if np.isfinite(r.get("phi_j", np.nan)):
+            ax.axvline(r["phi_j"], color=colour[r["variant"]], lw=0.6, alpha=0.6,
+                       ls=styles.get(r["engine"], "-"))
+    ax.set_xlabel(r"packing fraction $\phi$")
+    ax.set_ylabel(r"contact pressure $p D / k_n$")
+    ax.set_title("p(phi) of every run; vertical lines: fitted phi_J", fontsize=9)
+    lo = [float(r["thermo"].pressure[r["thermo"].pressure > 0].min() / p_scale) for r in runs
+          if (r["thermo"].pressure > 0).any()]
+    if lo:
+        ax.set_ylim(bottom=max(min(lo) / 2, 1e-9))
+    ax.legend(fontsize=7)
     _save(fig, out)

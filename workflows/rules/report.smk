@@ -12,6 +12,12 @@ def _p_scale(wc):
     return case["contact"]["k_n"] / case["particles"]["diameter"]["mean"]
 
 
+def _study_p_scale(study):
+    # k_n / D of the study's first case: variants of one study share the pressure unit
+    case = CFG["_cases"][next(k for k in CFG["_cases"] if k[0] == study)]
+    return case["contact"]["k_n"] / case["particles"]["diameter"]["mean"]
+
+
 rule plot_study:
     input:
         lambda wc: [
@@ -51,8 +57,10 @@ rule plot_study:
 
 
 def _trend_parameter(study):
-    params = varying_parameters(CFG, study)
-    return "alpha" if "alpha" in params else (sorted(params)[0] if params else None)
+    # output intervals may differ between variants (slow runs write less often): never
+    # a physical parameter to plot against
+    params = sorted(set(varying_parameters(CFG, study)) - {"thermo_every", "dump_every"})
+    return "alpha" if "alpha" in params else (params[0] if params else None)
 
 
 rule plot_trends:
@@ -91,6 +99,28 @@ rule plot_angles:
         runs=lambda wc: " ".join(run_dirs(wc.study)),
     shell:
         "{PYTHON} -m workflows.scripts.plot_angles --runs {params.runs} --out {output} 2> {log}"
+
+
+rule plot_pressures:
+    input:
+        lambda wc: [
+            f"{d}/{name}" for d in run_dirs(wc.study) for name in ("observables.csv", "run.json")
+        ],
+    output:
+        report(
+            f"{RESULTS}/{{study}}/figures/pressure_variants.png",
+            caption="../report/pressure_variants.rst",
+            category="{study}",
+        ),
+    log:
+        f"{RESULTS}/{{study}}/figures/pressure_variants.log",
+    params:
+        runs=lambda wc: " ".join(run_dirs(wc.study)),
+        parameter=lambda wc: _trend_parameter(wc.study),
+        p_scale=lambda wc: _study_p_scale(wc.study),
+    shell:
+        "{PYTHON} -m workflows.scripts.plot_pressures --runs {params.runs}"
+        " --parameter {params.parameter} --p-scale {params.p_scale} --out {output} 2> {log}"
 
 
 rule body_check:

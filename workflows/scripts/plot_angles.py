@@ -48,6 +48,8 @@ def main(argv=None) -> int:
             continue
         case = load_case(run.parent / "case.yaml")
         alpha = case["particles"].get("aspect_ratio", 0.0)
+        if alpha <= 0:
+            continue  # disks and spheres have no spine to measure the angle from
         picked = jamming_frame(run, case["protocol"]["name"])
         if picked is None:
             continue
