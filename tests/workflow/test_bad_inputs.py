@@ -148,7 +148,8 @@ CONFIG_CASES = [
     ({"studies": {"s": {"engines": [], "seeds": [1], "case": {}}}},
      "studies.s.engines = [] is not allowed; use a list with min 1 items"),
     ({"studies": {"s": {"engines": ["gromacs"], "seeds": [1], "case": {}}}},
-     "studies.s.engines.0 = 'gromacs' is not allowed; use one of 'pysim', 'lammps', 'liggghts'"),
+     "studies.s.engines.0 = 'gromacs' is not allowed; use one of 'pysim', 'lammps', 'lammps-body', "
+     "'liggghts'"),
     ({"studies": {"s": {"engines": ["pysim"], "seeds": [], "case": {}}}},
      "studies.s.seeds = [] is not allowed; use a list with min 1 items"),
     ({"studies": {"Bad-Name": {"engines": ["pysim"], "seeds": [1], "case": {}}}},
