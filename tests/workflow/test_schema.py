@@ -3,6 +3,7 @@ allowed, exit status 2, and write nothing."""
 import copy
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 import yaml
@@ -193,3 +194,12 @@ def test_tapping_container_needs_its_diameter():
     with pytest.raises(ConfigError, match=r"container\.diameter is required for shape "
                                           r"'cylinder'"):
         validate_case(tap_case(container={"shape": "cylinder", "width": 5e-3}), "case.yaml")
+
+
+@pytest.mark.parametrize("path", sorted((Path(__file__).resolve().parents[2] / "workflows" /
+                                         "config").glob("*.yaml")), ids=lambda p: p.name)
+def test_every_shipped_profile_validates(path):
+    from workflows.case import runs
+
+    config = load_config(path)
+    assert runs(config), f"{path.name} expands to no run"
