@@ -46,6 +46,11 @@ from pysim.jit import njit, pnjit, prange
 REC_COLUMNS = 10
 #: columns of the per-pair reaction ``fj``: force on j (3), torque on j (3)
 FJ_COLUMNS = 6
+#: the column of ``fj`` (when it has one) that holds the pair's spine distance at the last
+#: list build (:func:`pysim.neighbors.spine_separations`), for skipping pairs out of reach
+SEP = 6
+#: columns of the per-pair scratch the integrators keep: the reaction and the separation
+PAIR_SCRATCH = 7
 #: rows per block of the parallel pair loop (fixed: results never depend on threads)
 BLOCK = 64
 #: columns of a block's partial sums: elastic energy, contacts, virial (9)
@@ -175,19 +180,26 @@ def block_totals(blk, virial):
 
 @pnjit
 def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law, p,
-              friction, dt, rods, f, torque, fj, stats, virial):
+              friction, dt, rods, f, torque, fj, stats, virial, sep_sigma=0.0, sep_shrink=0.0):
     """Forces and torques of every listed pair on its first particle, written to
     ``f``/``torque`` (overwritten: row sums), and the reaction on the second particle
     stored per pair in ``fj`` (force, torque; zero out of contact) for
     :func:`reduce_pass`. ``rods`` False skips the spine geometry (all spheres). With
     ``stats`` also the virial ``virial[a, b] = sum (x_j - x_i)_a F_b`` (overwritten), and
     returns ``(elastic energy, contacts)``; otherwise ``(0.0, 0)``. Contacts are the pairs
-    that carry a force: touching (``delta > 0``) or, with cohesion, closer than ``d_c``."""
+    that carry a force: touching (``delta > 0``) or, with cohesion, closer than ``d_c``.
+
+    With ``sep_sigma > 0`` and the separation column :data:`SEP` in ``fj``, a pair whose
+    spine distance is bound to exceed its reach, ``sep_sigma g_ref - sep_shrink > R_i +
+    R_j + d_c`` (:func:`pysim.neighbors.motion_bound`), is not evaluated: it would add
+    nothing, so the results are the same bits, and listed rods that stay out of reach
+    skip the closest-point search."""
     n = x.shape[0]
     kn, gn, kt, gt, mu = p[K_N], p[GAMMA_N], p[K_T], p[GAMMA_T], p[MU]
     fcoh, dcoh = p[F_COH], p[D_COH]
     b0, b1, b2 = box[0], box[1], box[2]
     p0, p1, p2 = periodic[0], periodic[1], periodic[2]
+    use_sep = sep_sigma > 0.0 and fj.shape[1] > SEP
     ends = rods and p[END_BONDS] != 0.0
     nbond = 4 if ends else 1
     nb = (n + BLOCK - 1) // BLOCK
@@ -208,10 +220,19 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
             q2 = 0.0
             for k in range(istart[i], istart[i + 1]):
                 j = pj[k]
-                d0, d1, d2 = min_image(x[j, 0] - xi0, x[j, 1] - xi1, x[j, 2] - xi2, b0, b1, b2,
-                                       p0, p1, p2)
                 rj = radius[j]
                 reach = ri + rj + dcoh
+                # out of reach by the motion bound (a margin far above rounding): no force
+                if use_sep and sep_sigma * fj[k, SEP] - sep_shrink > reach * (1.0 + 1e-9):
+                    if friction:
+                        hist[k, 0] = 0.0
+                        hist[k, 1] = 0.0
+                        hist[k, 2] = 0.0
+                    for c in range(FJ_COLUMNS):
+                        fj[k, c] = 0.0
+                    continue
+                d0, d1, d2 = min_image(x[j, 0] - xi0, x[j, 1] - xi1, x[j, 2] - xi2, b0, b1, b2,
+                                       p0, p1, p2)
                 uj0, uj1, uj2, hj = u[j, 0], u[j, 1], u[j, 2], half[j]
                 # sums over the bonds of the pair (one, or four end bonds)
                 F0 = 0.0

@@ -37,9 +37,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from pysim.contacts import FJ_COLUMNS, pair_pass, reduce_pass, sphere_pass
+from pysim.contacts import PAIR_SCRATCH, SEP, pair_pass, reduce_pass, sphere_pass
 from pysim.jit import njit, pnjit, prange
-from pysim.neighbors import build_list, list_is_stale, transfer_rows
+from pysim.neighbors import (build_list, motion_bound, spine_separations, stale_by_bound,
+                             transfer_rows)
 from pysim.rotation import axis_from, axis_of, free_rotate, rotate_top
 from pysim.walls import wall_forces
 
@@ -47,14 +48,17 @@ SQRT_HALF = np.sqrt(0.5)
 
 # indices into the 'sys' scalar array
 (GAMMA_BG, GAMMA_ROT, GX, GY, GZ, EPS_X, EPS_Y, EPS_Z, GROWTH, SKIN, RINT_BUILD, K_D,
- RC_BUILD, HALF_BUILD, RODS, DIM2) = range(16)
-SYS_SIZE = 16
+ RC_BUILD, HALF_BUILD, RODS, DIM2, SEP_SIGMA, SEP_SHRINK) = range(18)
+SYS_SIZE = 18
 
 #: The pair arrays, passed and returned in this order by the kernels: the Verlet list
 #: (:func:`pysim.neighbors.build_list`: ``pi``, ``pj``, ``istart``, ``jstart``, ``jk``),
 #: the tangential springs ``hist`` (npairs, 3; (npairs, 0) without friction) and the
-#: per-pair reactions ``fj`` (at least npairs rows, scratch of
-#: :func:`pysim.contacts.pair_pass`).
+#: per-pair scratch ``fj`` (at least npairs rows: the reactions of
+#: :func:`pysim.contacts.pair_pass` and each pair's spine distance at the build, column
+#: :data:`pysim.contacts.SEP`). ``sys[SEP_SIGMA]``, ``sys[SEP_SHRINK]`` hold the motion
+#: bound since the build (:func:`pysim.neighbors.motion_bound`), set by
+#: :func:`maybe_rebuild`; ``SEP_SIGMA = 0`` turns the skipping of pairs out of reach off.
 PAIR_ARRAYS = ("pi", "pj", "istart", "jstart", "jk", "hist", "fj")
 
 
@@ -92,8 +96,9 @@ def rebuild(x, u, box, periodic, r_int, half, sys, old_istart, old_pj, old_hist,
     Returns the pair arrays (:data:`PAIR_ARRAYS`)."""
     pi, pj, istart, jstart, jk = build_list(x, u, r_int, half, box, periodic, sys[SKIN])
     hist = transfer_rows(old_istart, old_pj, old_hist, istart, pj)
-    if fj.shape[0] < pj.shape[0]:  # scratch with 10 % to spare
-        fj = np.empty((pj.shape[0] + pj.shape[0] // 10 + 16, FJ_COLUMNS))
+    if fj.shape[0] < pj.shape[0] or fj.shape[1] < PAIR_SCRATCH:  # scratch with 10 % to spare
+        fj = np.empty((pj.shape[0] + pj.shape[0] // 10 + 16, PAIR_SCRATCH))
+    spine_separations(x, u, half, box, periodic, pi, pj, fj[:, SEP])
     x_ref[:, :] = x
     if u_ref.shape[0] == u.shape[0]:
         u_ref[:, :] = u
@@ -106,6 +111,8 @@ def rebuild(x, u, box, periodic, r_int, half, sys, old_istart, old_pj, old_hist,
     sys[RINT_BUILD] = max_of(r_int)
     sys[RC_BUILD] = 2.0 * rc
     sys[HALF_BUILD] = hm
+    sys[SEP_SIGMA] = 1.0
+    sys[SEP_SHRINK] = 0.0
     return pi, pj, istart, jstart, jk, hist, fj
 
 
@@ -116,8 +123,11 @@ def maybe_rebuild(x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart,
     could come into contact (:func:`pysim.neighbors.list_is_stale`). Returns the pair
     arrays and whether it rebuilt."""
     growth = max_of(r_int) / sys[RINT_BUILD] if sys[RINT_BUILD] > 0 else 1.0
-    if not list_is_stale(x, x_ref, u, u_ref, half, box, box_ref, periodic, sys[RC_BUILD],
-                         sys[HALF_BUILD], sys[SKIN], growth):
+    sigma, shrink = motion_bound(x, x_ref, u, u_ref, half, box, box_ref, periodic,
+                                 sys[HALF_BUILD], growth)
+    if not stale_by_bound(sigma, shrink, sys[RC_BUILD], sys[SKIN], growth):
+        sys[SEP_SIGMA] = sigma
+        sys[SEP_SHRINK] = shrink
         return pi, pj, istart, jstart, jk, hist, fj, False
     pi, pj, istart, jstart, jk, hist, fj = rebuild(x, u, box, periodic, r_int, half, sys,
                                                    istart, pj, hist, fj, x_ref, u_ref, box_ref)
@@ -145,7 +155,8 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pj, istart, jstart
     the virial is left as it was and the first two are zero."""
     if sys[RODS] != 0.0:
         pe, nc = pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law,
-                           cp, friction, dt, True, f, torque, fj, stats, virial)
+                           cp, friction, dt, True, f, torque, fj, stats, virial, sys[SEP_SIGMA],
+                           sys[SEP_SHRINK])
     else:
         pe, nc = sphere_pass(x, v, omega, radius, box, periodic, pj, istart, hist, law, cp,
                              friction, dt, f, torque, fj, stats, virial)

@@ -248,21 +248,17 @@ def transfer_rows(old_start, old_pj, old_hist, new_start, new_pj):
 
 
 @pnjit
-def list_is_stale(x, x_ref, u, u_ref, half, box, box_ref, periodic, rc_ref, h_ref, skin,
-                  growth):
-    """True when an unlisted pair could now be in contact.
+def motion_bound(x, x_ref, u, u_ref, half, box, box_ref, periodic, h_ref, growth):
+    """How far spines can have come closer since the last build: returns ``(sigma,
+    shrink)`` such that every pair's spine distance now is at least
+    ``sigma g_ref - shrink`` (``g_ref`` its spine distance at the build).
 
-    At the last build (positions ``x_ref``, axes ``u_ref``, box ``box_ref``) every unlisted
-    pair had a spine distance above ``r_cs + skin`` (``r_cs <= rc_ref``, twice the largest
-    contact reach). Since then the box was scaled per axis by ``a_k`` (``sigma = min(1,
-    a_k)``, ``eps = max |1 - a_k|``), every reach and half-length grew by ``growth``, and a
-    spine point of particle ``i`` moved by at most ``delta_i = |x_i - a x_ref_i| +
-    h_i |u_i - u_ref_i|`` relative to the scaled reference. The spine distance of the pair
-    is then at least ``sigma (r_cs + skin) - 2 (eps + |growth - 1|) h_ref - 2 max delta``,
-    while contact needs less than ``growth r_cs``: rebuild when the bound can fall below
-    (``h_ref`` the largest half-length at the build). For spheres this is the classic
-    ``2 max |dx| > skin`` rule, corrected for box contraction.
-    """
+    Since the build (positions ``x_ref``, axes ``u_ref``, box ``box_ref``) the box was
+    scaled per axis by ``a_k`` (``sigma = min(1, a_k)``, ``eps = max |1 - a_k|``), every
+    reach and half-length grew by ``growth``, and a spine point of particle ``i`` moved by
+    at most ``delta_i = |x_i - a x_ref_i| + h_i |u_i - u_ref_i|`` relative to the scaled
+    reference; so ``shrink = 2 (eps + |growth - 1|) h_ref + 2 max delta`` (``h_ref`` the
+    largest half-length at the build)."""
     n = x.shape[0]
     sigma = 1.0
     eps = 0.0
@@ -297,9 +293,58 @@ def list_is_stale(x, x_ref, u, u_ref, half, box, box_ref, periodic, rc_ref, h_re
     for b in range(nb):
         if dmax[b] > worst:
             worst = dmax[b]
-    lhs = sigma * skin - 2.0 * (eps + abs(growth - 1.0)) * h_ref - 2.0 * worst
-    rhs = max(growth - sigma, 0.0) * rc_ref
-    return lhs <= rhs
+    return sigma, 2.0 * (eps + abs(growth - 1.0)) * h_ref + 2.0 * worst
+
+
+@njit
+def stale_by_bound(sigma, shrink, rc_ref, skin, growth):
+    """True when the bound of :func:`motion_bound` lets an unlisted pair (spine distance
+    above ``r_cs + skin`` at the build, ``r_cs <= rc_ref``) come into contact, which needs
+    less than ``growth r_cs``."""
+    return sigma * skin - shrink <= max(growth - sigma, 0.0) * rc_ref
+
+
+@njit
+def list_is_stale(x, x_ref, u, u_ref, half, box, box_ref, periodic, rc_ref, h_ref, skin,
+                  growth):
+    """True when an unlisted pair could now be in contact.
+
+    At the last build every unlisted pair had a spine distance above ``r_cs + skin``
+    (``r_cs <= rc_ref``, twice the largest contact reach); by :func:`motion_bound` it is
+    now at least ``sigma (r_cs + skin) - shrink``, while contact needs less than
+    ``growth r_cs``: rebuild when the bound can fall below. For spheres this is the
+    classic ``2 max |dx| > skin`` rule, corrected for box contraction.
+    """
+    sigma, shrink = motion_bound(x, x_ref, u, u_ref, half, box, box_ref, periodic, h_ref,
+                                 growth)
+    return stale_by_bound(sigma, shrink, rc_ref, skin, growth)
+
+
+@pnjit
+def spine_separations(x, u, half, box, periodic, pi, pj, out):
+    """``out[k]``: the spine distance of pair ``k`` (centre distance for two spheres), for
+    the bound of :func:`motion_bound` (the contact loop skips pairs that the bound keeps
+    out of reach)."""
+    m = pi.shape[0]
+    for k in prange(m):
+        i = pi[k]
+        j = pj[k]
+        d0 = x[j, 0] - x[i, 0]
+        d1 = x[j, 1] - x[i, 1]
+        d2 = x[j, 2] - x[i, 2]
+        if periodic[0]:
+            d0 -= box[0] * np.floor(d0 / box[0] + 0.5)
+        if periodic[1]:
+            d1 -= box[1] * np.floor(d1 / box[1] + 0.5)
+        if periodic[2]:
+            d2 -= box[2] * np.floor(d2 / box[2] + 0.5)
+        if half[i] > 0.0 or half[j] > 0.0:
+            s, t = closest_params(-d0, -d1, -d2, u[i, 0], u[i, 1], u[i, 2], half[i],
+                                  u[j, 0], u[j, 1], u[j, 2], half[j])
+            d0 += t * u[j, 0] - s * u[i, 0]
+            d1 += t * u[j, 1] - s * u[i, 1]
+            d2 += t * u[j, 2] - s * u[i, 2]
+        out[k] = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
 
 
 def spatial_order(x, box, cell: float = 1.0) -> np.ndarray:

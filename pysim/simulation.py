@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pysim import integrators as itg
-from pysim.contacts import REC_COLUMNS, pair_forces, worst_overlap
+from pysim.contacts import PAIR_SCRATCH, REC_COLUMNS, pair_forces, worst_overlap
 from pysim.forces import LAW_IDS, contact_params
 from pysim.neighbors import row_starts, transpose
 from pysim.state import State
@@ -242,7 +242,7 @@ class Simulation:
         self.pj = np.ascontiguousarray(self.pj, dtype=np.int32)
         self._istart = row_starts(self.pi, n)
         self._jstart, self._jk = transpose(self.pj, n)
-        self._fj = np.empty((len(self.pi), 6))
+        self._fj = np.zeros((len(self.pi), PAIR_SCRATCH))  # separations 0: nothing skipped
 
     def _rebuild(self):
         s = self.state
@@ -255,6 +255,7 @@ class Simulation:
         """Forces, torques and virial of the current state (half-step velocities are
         whatever ``state.v`` holds)."""
         s = self.state
+        self.sys[itg.SEP_SIGMA] = 0.0  # the state may have changed since the motion bound
         self._pe, self._nc, self._nw = itg.forces(
             s.x, s.v, s.omega, s.u, s.radius, self.half, s.mass, s.box, s.periodic,
             *self._pairs()[1:], self.model.law_id, self._cp, self.model.friction, self.planes,

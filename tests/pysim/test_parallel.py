@@ -213,3 +213,45 @@ def test_sphere_pass_equals_the_general_pass(rng, friction):
     for k in range(5):
         np.testing.assert_allclose(a[k], b[k], rtol=1e-12, atol=1e-12)
     assert a[5] == pytest.approx(b[5], rel=1e-14)
+
+
+def test_pairs_skipped_by_the_motion_bound_change_nothing(rng):
+    """The contact loop skips listed pairs that the motion bound keeps out of reach: after
+    random translations, rotations and a box contraction the forces, torques, reactions
+    and springs are the same bits as with every pair evaluated, and pairs were skipped."""
+    from pysim.contacts import PAIR_SCRATCH, SEP
+    from pysim.neighbors import motion_bound, spine_separations
+
+    n = 200
+    x, u, r, length, box = random_spherocylinders(np.full(n, 0.5), rng.uniform(0, 3, n), 0.3, 3)
+    half = length / 2
+    pi, pj, istart, jstart, jk = build_list(x, u, r + half, half, box, PER, 0.4)
+    scratch = np.zeros((len(pi), PAIR_SCRATCH))
+    spine_separations(x, u, half, box, PER, pi, pj, scratch[:, SEP])
+    x_ref, u_ref, box_ref = x.copy(), u.copy(), box.copy()
+    p = contact_params(1e4, 5.0, k_t=5e3, gamma_t=1.0, mu=0.5)
+    skipped = 0
+    for step in range(40):
+        box = box * np.exp(-0.0005)
+        x = (x * np.exp(-0.0005) + rng.normal(0, 0.002, x.shape)) % box
+        u = u + rng.normal(0, 0.002, u.shape)
+        u /= np.linalg.norm(u, axis=1, keepdims=True)
+        sigma, shrink = motion_bound(x, x_ref, u, u_ref, half, box, box_ref, PER, half.max(),
+                                     1.0)
+        v = rng.normal(0, 1, (n, 3))
+        w = rng.normal(0, 1, (n, 3))
+        hist = rng.normal(0, 1e-4, (len(pi), 3))
+        out = []
+        for bound in ((0.0, 0.0), (sigma, shrink)):
+            f, tq, vir = np.empty((n, 3)), np.empty((n, 3)), np.zeros((3, 3))
+            fj = scratch.copy()
+            fj[:, :SEP] = np.nan
+            h = hist.copy()
+            pair_pass(x, v, w, u, r, half, box, PER, pj, istart, h, HOOKE, p, True, 1e-4, True,
+                      f, tq, fj, True, vir, *bound)
+            out.append((f, tq, fj[:, :SEP], h, vir))
+        for a, b in zip(*out):
+            np.testing.assert_array_equal(a, b)
+        gap = sigma * scratch[:, SEP] - shrink - (r[pi] + r[pj])
+        skipped += int(np.sum(gap > 1e-9))
+    assert skipped > 1000
