@@ -12,10 +12,15 @@ loops call them:
   owns its pairs ``(i, j > i)`` and their tangential springs ``hist``), sums the forces
   and torques on ``i`` in row order and stores the reaction on ``j`` per pair (``fj``);
   ``reduce_pass`` then adds to each particle ``p`` the reactions of the pairs in which
-  it is the second member, in pair order. Global sums (elastic energy, contacts,
-  virial) are taken per fixed block of rows and the block sums added in block order.
-  Nothing depends on how rows are shared among threads, so 1 and 2 threads give the
-  same bits.
+  it is the second member, summed from zero in pair order, to the row sum. On one
+  thread (``scatter``) the rows run in order and the pass adds each reaction to the
+  second particle at once: when row ``i`` is reached the reactions on ``i`` are
+  complete, and ``f_i = row sum + reaction sum`` is the same sum in the same order, with
+  no per-pair store and gather. Global sums (elastic energy, contacts, virial) are taken
+  per fixed block of rows and the block sums added in block order. Nothing depends on
+  how rows are shared among threads, so 1 and 2 threads give the same bits. Listed rod
+  pairs that the motion since the list build keeps out of reach are skipped
+  (:func:`pysim.neighbors.motion_bound`; they would add nothing).
 * :func:`pair_forces`, a plain serial loop in pair order that can also record the
   contact table (used with each dump, and by the tests).
 
@@ -180,7 +185,8 @@ def block_totals(blk, virial):
 
 @pnjit
 def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law, p,
-              friction, dt, rods, f, torque, fj, stats, virial, sep_sigma=0.0, sep_shrink=0.0):
+              friction, dt, rods, f, torque, fj, stats, virial, sep_sigma=0.0, sep_shrink=0.0,
+              scatter=False):
     """Forces and torques of every listed pair on its first particle, written to
     ``f``/``torque`` (overwritten: row sums), and the reaction on the second particle
     stored per pair in ``fj`` (force, torque; zero out of contact) for
@@ -193,7 +199,12 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
     spine distance is bound to exceed its reach, ``sep_sigma g_ref - sep_shrink > R_i +
     R_j + d_c`` (:func:`pysim.neighbors.motion_bound`), is not evaluated: it would add
     nothing, so the results are the same bits, and listed rods that stay out of reach
-    skip the closest-point search."""
+    skip the closest-point search.
+
+    ``scatter`` (one thread only: the rows must run in order) adds the reactions straight
+    to ``f``/``torque`` of the second particle instead of storing them in ``fj``: when row
+    ``i`` is reached its reactions are complete, and it writes ``f_i = row sum + reaction
+    sum``, the same bits as :func:`reduce_pass` gives (no ``reduce_pass`` gather needed)."""
     n = x.shape[0]
     kn, gn, kt, gt, mu = p[K_N], p[GAMMA_N], p[K_T], p[GAMMA_T], p[MU]
     fcoh, dcoh = p[F_COH], p[D_COH]
@@ -204,6 +215,8 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
     nbond = 4 if ends else 1
     nb = (n + BLOCK - 1) // BLOCK
     blk = np.zeros((nb if stats else 0, _STATS))
+    if scatter:
+        _zero(f, torque)
     for b in prange(nb):
         for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
             xi0, xi1, xi2 = x[i, 0], x[i, 1], x[i, 2]
@@ -228,8 +241,9 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
                         hist[k, 0] = 0.0
                         hist[k, 1] = 0.0
                         hist[k, 2] = 0.0
-                    for c in range(FJ_COLUMNS):
-                        fj[k, c] = 0.0
+                    if not scatter:
+                        for c in range(FJ_COLUMNS):
+                            fj[k, c] = 0.0
                     continue
                 d0, d1, d2 = min_image(x[j, 0] - xi0, x[j, 1] - xi1, x[j, 2] - xi2, b0, b1, b2,
                                        p0, p1, p2)
@@ -291,8 +305,9 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
                         hist[k, 0] = 0.0
                         hist[k, 1] = 0.0
                         hist[k, 2] = 0.0
-                    for c in range(FJ_COLUMNS):
-                        fj[k, c] = 0.0
+                    if not scatter:
+                        for c in range(FJ_COLUMNS):
+                            fj[k, c] = 0.0
                     continue
                 s0 += F0
                 s1 += F1
@@ -300,12 +315,20 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
                 q0 += t0
                 q1 += t1
                 q2 += t2
-                fj[k, 0] = -F0
-                fj[k, 1] = -F1
-                fj[k, 2] = -F2
-                fj[k, 3] = r0
-                fj[k, 4] = r1
-                fj[k, 5] = r2
+                if scatter:
+                    f[j, 0] -= F0
+                    f[j, 1] -= F1
+                    f[j, 2] -= F2
+                    torque[j, 0] += r0
+                    torque[j, 1] += r1
+                    torque[j, 2] += r2
+                else:
+                    fj[k, 0] = -F0
+                    fj[k, 1] = -F1
+                    fj[k, 2] = -F2
+                    fj[k, 3] = r0
+                    fj[k, 4] = r1
+                    fj[k, 5] = r2
                 if stats:
                     blk[b, 0] += pe
                     blk[b, 1] += 1.0
@@ -318,12 +341,20 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
                     blk[b, 8] += d2 * F0
                     blk[b, 9] += d2 * F1
                     blk[b, 10] += d2 * F2
-            f[i, 0] = s0
-            f[i, 1] = s1
-            f[i, 2] = s2
-            torque[i, 0] = q0
-            torque[i, 1] = q1
-            torque[i, 2] = q2
+            if scatter:  # the reactions on i are complete: row sum + reaction sum
+                f[i, 0] = s0 + f[i, 0]
+                f[i, 1] = s1 + f[i, 1]
+                f[i, 2] = s2 + f[i, 2]
+                torque[i, 0] = q0 + torque[i, 0]
+                torque[i, 1] = q1 + torque[i, 1]
+                torque[i, 2] = q2 + torque[i, 2]
+            else:
+                f[i, 0] = s0
+                f[i, 1] = s1
+                f[i, 2] = s2
+                torque[i, 0] = q0
+                torque[i, 1] = q1
+                torque[i, 2] = q2
     if stats:
         return block_totals(blk, virial)
     return 0.0, 0
@@ -331,13 +362,14 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
 
 @pnjit
 def sphere_pass(x, v, omega, radius, box, periodic, pj, istart, hist, law, p, friction, dt, f,
-                torque, fj, stats, virial):
+                torque, fj, stats, virial, scatter=False):
     """:func:`pair_pass` for spheres only (every ``L = 0``), with the geometry and the
     normal laws written out in the loop: the same equations and the same outputs, about
     twice as fast. The normal passes through both centres, so normal forces exert no
     torque; with friction the tangential force does, ``c x F_t`` on i and ``-e x F_t``
     on j (``c``, ``e`` the contact point relative to the centres). The minimum image is
-    taken by comparison with half the box (positions are wrapped into the box)."""
+    taken by comparison with half the box (positions are wrapped into the box).
+    ``scatter`` as in :func:`pair_pass`."""
     n = x.shape[0]
     kn, gn, kt, gt, mu = p[K_N], p[GAMMA_N], p[K_T], p[GAMMA_T], p[MU]
     fcoh, dcoh = p[F_COH], p[D_COH]
@@ -346,6 +378,8 @@ def sphere_pass(x, v, omega, radius, box, periodic, pj, istart, hist, law, p, fr
     p0, p1, p2 = periodic[0], periodic[1], periodic[2]
     nb = (n + BLOCK - 1) // BLOCK
     blk = np.zeros((nb if stats else 0, _STATS))
+    if scatter:
+        _zero(f, torque)
     for b in prange(nb):
         for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
             xi0, xi1, xi2 = x[i, 0], x[i, 1], x[i, 2]
@@ -386,12 +420,9 @@ def sphere_pass(x, v, omega, radius, box, periodic, pj, istart, hist, law, p, fr
                         hist[k, 0] = 0.0
                         hist[k, 1] = 0.0
                         hist[k, 2] = 0.0
-                    fj[k, 0] = 0.0
-                    fj[k, 1] = 0.0
-                    fj[k, 2] = 0.0
-                    fj[k, 3] = 0.0
-                    fj[k, 4] = 0.0
-                    fj[k, 5] = 0.0
+                    if not scatter:
+                        for c in range(FJ_COLUMNS):
+                            fj[k, c] = 0.0
                     continue
                 dist = np.sqrt(dist2)
                 inv = 1.0 / dist
@@ -460,12 +491,20 @@ def sphere_pass(x, v, omega, radius, box, periodic, pj, istart, hist, law, p, fr
                 q0 += t0
                 q1 += t1
                 q2 += t2
-                fj[k, 0] = -F0
-                fj[k, 1] = -F1
-                fj[k, 2] = -F2
-                fj[k, 3] = u0
-                fj[k, 4] = u1
-                fj[k, 5] = u2
+                if scatter:
+                    f[j, 0] -= F0
+                    f[j, 1] -= F1
+                    f[j, 2] -= F2
+                    torque[j, 0] += u0
+                    torque[j, 1] += u1
+                    torque[j, 2] += u2
+                else:
+                    fj[k, 0] = -F0
+                    fj[k, 1] = -F1
+                    fj[k, 2] = -F2
+                    fj[k, 3] = u0
+                    fj[k, 4] = u1
+                    fj[k, 5] = u2
                 if stats:
                     if delta > 0.0:
                         blk[b, 0] += elastic_energy(law, kn, delta, rs)
@@ -479,23 +518,41 @@ def sphere_pass(x, v, omega, radius, box, periodic, pj, istart, hist, law, p, fr
                     blk[b, 8] += d2 * F0
                     blk[b, 9] += d2 * F1
                     blk[b, 10] += d2 * F2
-            f[i, 0] = s0
-            f[i, 1] = s1
-            f[i, 2] = s2
-            torque[i, 0] = q0
-            torque[i, 1] = q1
-            torque[i, 2] = q2
+            if scatter:  # the reactions on i are complete: row sum + reaction sum
+                f[i, 0] = s0 + f[i, 0]
+                f[i, 1] = s1 + f[i, 1]
+                f[i, 2] = s2 + f[i, 2]
+                torque[i, 0] = q0 + torque[i, 0]
+                torque[i, 1] = q1 + torque[i, 1]
+                torque[i, 2] = q2 + torque[i, 2]
+            else:
+                f[i, 0] = s0
+                f[i, 1] = s1
+                f[i, 2] = s2
+                torque[i, 0] = q0
+                torque[i, 1] = q1
+                torque[i, 2] = q2
     if stats:
         return block_totals(blk, virial)
     return 0.0, 0
 
 
+@njit
+def _zero(f, torque):
+    for i in range(f.shape[0]):
+        for c in range(3):
+            f[i, c] = 0.0
+            torque[i, c] = 0.0
+
+
 @pnjit
 def reduce_pass(f, torque, jstart, jk, fj, v, omega, mass, gx, gy, gz, gamma_bg, gamma_rot,
-                body):
-    """Add to each particle the reactions of the pairs in which it is the second member
-    (in pair order), then, with ``body``, gravity ``m g`` and the drags ``-gamma_bg v``,
-    ``-gamma_rot omega``."""
+                body, gathered=False):
+    """Complete each particle's force and torque: the row sums in ``f``/``torque`` plus the
+    reactions of the pairs in which it is the second member (summed from zero in pair
+    order, then added: ``f_i = row sum + reaction sum``), then, with ``body``, gravity
+    ``m g`` and the drags ``-gamma_bg v``, ``-gamma_rot omega``. ``gathered``: the contact
+    pass scattered the reactions already (one thread), only the body forces are added."""
     for i in prange(f.shape[0]):
         s0 = f[i, 0]
         s1 = f[i, 1]
@@ -503,14 +560,27 @@ def reduce_pass(f, torque, jstart, jk, fj, v, omega, mass, gx, gy, gz, gamma_bg,
         q0 = torque[i, 0]
         q1 = torque[i, 1]
         q2 = torque[i, 2]
-        for q in range(jstart[i], jstart[i + 1]):
-            k = jk[q]
-            s0 += fj[k, 0]
-            s1 += fj[k, 1]
-            s2 += fj[k, 2]
-            q0 += fj[k, 3]
-            q1 += fj[k, 4]
-            q2 += fj[k, 5]
+        if not gathered:
+            g0 = 0.0
+            g1 = 0.0
+            g2 = 0.0
+            h0 = 0.0
+            h1 = 0.0
+            h2 = 0.0
+            for q in range(jstart[i], jstart[i + 1]):
+                k = jk[q]
+                g0 += fj[k, 0]
+                g1 += fj[k, 1]
+                g2 += fj[k, 2]
+                h0 += fj[k, 3]
+                h1 += fj[k, 4]
+                h2 += fj[k, 5]
+            s0 = s0 + g0
+            s1 = s1 + g1
+            s2 = s2 + g2
+            q0 = q0 + h0
+            q1 = q1 + h1
+            q2 = q2 + h2
         if body:
             s0 += mass[i] * gx - gamma_bg * v[i, 0]
             s1 += mass[i] * gy - gamma_bg * v[i, 1]

@@ -48,8 +48,8 @@ SQRT_HALF = np.sqrt(0.5)
 
 # indices into the 'sys' scalar array
 (GAMMA_BG, GAMMA_ROT, GX, GY, GZ, EPS_X, EPS_Y, EPS_Z, GROWTH, SKIN, RINT_BUILD, K_D,
- RC_BUILD, HALF_BUILD, RODS, DIM2, SEP_SIGMA, SEP_SHRINK) = range(18)
-SYS_SIZE = 18
+ RC_BUILD, HALF_BUILD, RODS, DIM2, SEP_SIGMA, SEP_SHRINK, SCATTER) = range(19)
+SYS_SIZE = 19
 
 #: The pair arrays, passed and returned in this order by the kernels: the Verlet list
 #: (:func:`pysim.neighbors.build_list`: ``pi``, ``pj``, ``istart``, ``jstart``, ``jk``),
@@ -59,6 +59,7 @@ SYS_SIZE = 18
 #: :data:`pysim.contacts.SEP`). ``sys[SEP_SIGMA]``, ``sys[SEP_SHRINK]`` hold the motion
 #: bound since the build (:func:`pysim.neighbors.motion_bound`), set by
 #: :func:`maybe_rebuild`; ``SEP_SIGMA = 0`` turns the skipping of pairs out of reach off.
+#: ``sys[SCATTER] = 1`` when the kernels run on one thread (:func:`forces`).
 PAIR_ARRAYS = ("pi", "pj", "istart", "jstart", "jk", "hist", "fj")
 
 
@@ -153,20 +154,24 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pj, istart, jstart
     ``-gamma_bg v`` and ``-gamma_rot omega`` (added in that order). With ``stats`` also
     the virial and returns ``(elastic energy, pair contacts, wall contacts)``; without,
     the virial is left as it was and the first two are zero."""
+    # one thread (sys[SCATTER] = 1, set by the caller): the contact pass adds the
+    # reactions itself, its rows running in order (the same bits as with threads)
+    scatter = sys[SCATTER] != 0.0
     if sys[RODS] != 0.0:
         pe, nc = pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law,
                            cp, friction, dt, True, f, torque, fj, stats, virial, sys[SEP_SIGMA],
-                           sys[SEP_SHRINK])
+                           sys[SEP_SHRINK], scatter)
     else:
         pe, nc = sphere_pass(x, v, omega, radius, box, periodic, pj, istart, hist, law, cp,
-                             friction, dt, f, torque, fj, stats, virial)
+                             friction, dt, f, torque, fj, stats, virial, scatter)
     gx, gy, gz = sys[GX], sys[GY], sys[GZ]
     gb = sys[GAMMA_BG]
     gr = sys[GAMMA_ROT]
     body = gx != 0.0 or gy != 0.0 or gz != 0.0 or gb != 0.0 or gr != 0.0
     walls = planes.shape[0] + cyls.shape[0] > 0
-    reduce_pass(f, torque, jstart, jk, fj, v, omega, mass, gx, gy, gz, gb, gr,
-                body and not walls)
+    if not scatter or (body and not walls):
+        reduce_pass(f, torque, jstart, jk, fj, v, omega, mass, gx, gy, gz, gb, gr,
+                    body and not walls, scatter)
     nw = 0
     if walls:
         no_ij = np.empty((0, 2), np.int64)

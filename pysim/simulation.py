@@ -23,6 +23,7 @@ import numpy as np
 from pysim import integrators as itg
 from pysim.contacts import PAIR_SCRATCH, REC_COLUMNS, pair_forces, worst_overlap
 from pysim.forces import LAW_IDS, contact_params
+from pysim.jit import get_threads
 from pysim.neighbors import row_starts, transpose
 from pysim.state import State
 from pysim.walls import CYL_COLUMNS, PLANE_COLUMNS, wall_forces
@@ -256,11 +257,17 @@ class Simulation:
         whatever ``state.v`` holds)."""
         s = self.state
         self.sys[itg.SEP_SIGMA] = 0.0  # the state may have changed since the motion bound
+        self._sync_threads()
         self._pe, self._nc, self._nw = itg.forces(
             s.x, s.v, s.omega, s.u, s.radius, self.half, s.mass, s.box, s.periodic,
             *self._pairs()[1:], self.model.law_id, self._cp, self.model.friction, self.planes,
             self.cyls, self._wp, self._wfriction, self.whist, self.wall_force, self.sys, s.time,
             self.dt, self.f, self.torque, self.virial, True)
+
+    def _sync_threads(self):
+        """Tell the kernels whether they run on one thread (the contact pass then adds the
+        reactions itself; the same bits either way)."""
+        self.sys[itg.SCATTER] = 1.0 if get_threads() == 1 else 0.0
 
     def _check(self, what: str):
         s = self.state
@@ -293,6 +300,7 @@ class Simulation:
         rate[~s.periodic] = 0.0
         self.sys[itg.EPS_X:itg.EPS_Z + 1] = rate
         self.sys[itg.GROWTH] = growth_rate
+        self._sync_threads()
         (*pairs, self._pe, self._nc, self._nw, nreb) = itg.verlet_chunk(
             s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half, self.r_int,
             s.mass, s.inertia, s.box, s.periodic, *self._pairs(), self.x_ref, self.u_ref,
@@ -319,6 +327,7 @@ class Simulation:
             rate[2] = 0.0
         self.sys[itg.EPS_X:itg.EPS_Z + 1] = rate
         self.sys[itg.K_D] = k_d
+        self._sync_threads()
         msize = s.mass / s.density
         (*pairs, self._pe, self._nc, nreb) = itg.heun_chunk(
             s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half, self.r_int,
@@ -345,7 +354,7 @@ class Simulation:
         s.omega[:] = 0.0
         saved_sys = self.sys
         self.sys = sys
-        self.compute_forces()
+        self.compute_forces()  # also sets sys[SCATTER]
         (*pairs, self._pe, self._nc, it, fmax, tmax) = itg.fire_chunk(
             s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half, self.r_int,
             s.mass, s.inertia, s.box, s.periodic, *self._pairs(), self.x_ref, self.u_ref,
