@@ -12,7 +12,8 @@ argument costs two atomic reference-count updates per call, more than a contact 
 
 Threads never change results: every parallel loop either writes only to the particle or
 pair it owns, or reduces over fixed blocks whose partial sums are added in block order
-(see :mod:`pysim.contacts`), so 1 and 2 threads give the same bits. The number of
+(see :mod:`pysim.contacts`; on one thread the contact pass adds the reactions itself, in
+the order the threaded gather uses), so 1 and 2 threads give the same bits. The number of
 threads is Numba's (``NUMBA_NUM_THREADS``, default: all cores; :func:`set_threads`).
 
 Set ``NUMBA_DISABLE_JIT=1`` to run every kernel as plain Python (slow, but with
