@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from pysim.contacts import min_image, spine_gap
 from pysim.geometry import closest_params
 from pysim.jit import njit, pnjit, prange
 
@@ -325,26 +326,14 @@ def spine_separations(x, u, half, box, periodic, pi, pj, out):
     """``out[k]``: the spine distance of pair ``k`` (centre distance for two spheres), for
     the bound of :func:`motion_bound` (the contact loop skips pairs that the bound keeps
     out of reach)."""
-    m = pi.shape[0]
-    for k in prange(m):
+    for k in prange(pi.shape[0]):
         i = pi[k]
         j = pj[k]
-        d0 = x[j, 0] - x[i, 0]
-        d1 = x[j, 1] - x[i, 1]
-        d2 = x[j, 2] - x[i, 2]
-        if periodic[0]:
-            d0 -= box[0] * np.floor(d0 / box[0] + 0.5)
-        if periodic[1]:
-            d1 -= box[1] * np.floor(d1 / box[1] + 0.5)
-        if periodic[2]:
-            d2 -= box[2] * np.floor(d2 / box[2] + 0.5)
-        if half[i] > 0.0 or half[j] > 0.0:
-            s, t = closest_params(-d0, -d1, -d2, u[i, 0], u[i, 1], u[i, 2], half[i],
-                                  u[j, 0], u[j, 1], u[j, 2], half[j])
-            d0 += t * u[j, 0] - s * u[i, 0]
-            d1 += t * u[j, 1] - s * u[i, 1]
-            d2 += t * u[j, 2] - s * u[i, 2]
-        out[k] = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        d0, d1, d2 = min_image(x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2],
+                               box[0], box[1], box[2], periodic[0], periodic[1], periodic[2])
+        _, _, _, g0, g1, g2 = spine_gap(d0, d1, d2, u[i, 0], u[i, 1], u[i, 2], half[i],
+                                        u[j, 0], u[j, 1], u[j, 2], half[j])
+        out[k] = np.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
 
 
 def spatial_order(x, box, cell: float = 1.0) -> np.ndarray:
