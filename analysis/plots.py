@@ -292,13 +292,19 @@ def tapping_snapshots(frames, out, container_diameter: float, cut: float | None 
 def deposit_profiles(runs, out):
     """Deposits: packing fraction, vertical stress ``sigma_vv`` and horizontal stress
     ``sigma_hh`` (compressive positive, with the Janssen saturation fit of ``sigma_vv`` as
-    a thin line) versus the depth ``x = h / W``, and the distribution of the angle between
-    spines and the horizontal; one colour per variant, solid pysim, dashed LAMMPS.
+    a thin line) versus the depth ``x = h / W``, the distribution of the angle between
+    spines and the horizontal, the radial orientation correlation ``Q(r)`` and the
+    distribution of the angle between the major (most compressive) principal stress of
+    each coarse-graining element and the horizontal; one colour per variant, solid
+    pysim, dashed LAMMPS.
 
     ``runs``: dicts with ``label``, ``engine``, ``index`` (colour), ``profile``
-    (:func:`analysis.summary.analyse_deposit`) and ``angles`` (degrees, final frame).
+    (:func:`analysis.summary.analyse_deposit`), ``angles`` (degrees, final frame) and,
+    optionally, ``q_r`` (``(r / length, Q)``) and ``major`` (``(edges in degrees,
+    density, elements)``).
     """
-    fig, axes = plt.subplots(1, 4, figsize=(15, 4.2))
+    fig, axes = plt.subplots(2, 3, figsize=(14, 8))
+    axes = axes.ravel()
     cmap = plt.get_cmap("tab10")
     for r in runs:
         pr = r["profile"]
@@ -311,6 +317,11 @@ def deposit_profiles(runs, out):
         axes[2].plot(pr.sigma_hh, pr.x, color=color, ls=ls, marker=".")
         axes[3].hist(r["angles"], bins=18, range=(0, 90), density=True, histtype="step",
                      color=color, ls=ls)
+        if "q_r" in r:
+            axes[4].plot(*r["q_r"], color=color, ls=ls, marker=".", ms=3)
+        if "major" in r and r["major"][2] > 0:
+            edges, dens, _ = r["major"]
+            axes[5].stairs(dens * np.pi / 180, edges, color=color, ls=ls)
     for ax, label in zip(axes[:3], [r"packing fraction $\phi$", r"vertical stress $\sigma_{vv}$",
                                     r"horizontal stress $\sigma_{hh}$"]):
         ax.set_xlabel(label)
@@ -319,11 +330,18 @@ def deposit_profiles(runs, out):
     axes[1].set_title("thin: Janssen fit", fontsize=8)
     axes[3].set_xlabel("angle between spine and horizontal (deg)")
     axes[3].set_title("final frame", fontsize=8)
-    axes[3].set_ylabel("probability density")
+    axes[3].set_ylabel("probability density (1/deg)")
     beta = np.linspace(0, 90, 91)
     axes[3].plot(beta, np.cos(np.radians(beta)) * np.pi / 180, color="grey", lw=0.8, ls=":",
                  label="isotropic (3-D)")
     axes[3].legend(fontsize=6)
+    axes[4].axhline(0.0, color="grey", lw=0.6)
+    axes[4].set_xlabel("centre distance r / (L + D)")
+    axes[4].set_ylabel(r"$Q(r)$: $\langle P_2(u_i \cdot u_j)\rangle$ (2-D: "
+                       r"$\langle\cos 2\Delta\theta\rangle$)")
+    axes[5].set_xlabel("major principal stress axis to the horizontal (deg)")
+    axes[5].set_ylabel("probability density (1/deg)")
+    axes[5].set_title("elements of 5 particle lengths (non-empty)", fontsize=8)
     axes[0].legend(fontsize=6)
     fig.suptitle("deposits: profiles versus depth (solid pysim, dashed LAMMPS)", fontsize=9)
     fig.tight_layout()

@@ -1,5 +1,7 @@
 """Figure of a deposition study: profiles of packing fraction and stresses versus depth
-with the Janssen fits, and the orientation distributions, for every successful run."""
+with the Janssen fits, the orientation distributions, the radial orientation correlation
+``Q(r)`` and the directions of the major principal stress in elements of five particle
+lengths, for every successful run (final frames)."""
 from __future__ import annotations
 
 import argparse
@@ -11,8 +13,13 @@ import numpy as np
 import pandas as pd
 
 from analysis import plots
-from analysis.io import read_particle_frames
-from analysis.order import angle_to_horizontal
+from analysis.io import RunData
+from analysis.order import OrientationCorrelation, angle_to_horizontal
+from analysis.stress import StressField
+
+#: ``Q(r)`` out to this many particle lengths ``L + D``; stress elements of this many
+ORDER_RANGE = 3.0
+ELEMENT = 5.0
 
 
 def main(argv=None) -> int:
@@ -25,12 +32,18 @@ def main(argv=None) -> int:
     for d in a.run_dirs:
         if json.loads((d / "run.json").read_text()).get("status") != "ok":
             continue
-        last = read_particle_frames(d / "particles.dump")[-1]
+        last, contacts = RunData(d).frames()[-1]
         variant, seed, engine = d.parent.parent.name, d.parent.name, d.name
+        length = float(np.mean(last.length + 2.0 * last.radius))  # particle length L + D
+        q = OrientationCorrelation(ORDER_RANGE * length, bins=24).compute(last)
+        field = StressField(ELEMENT * length, angle_bins=9).compute(last, contacts)
         runs.append({"label": f"{variant} {engine} {seed}", "engine": engine,
                      "index": variants.index(variant),
                      "profile": pd.read_csv(d / "curves.csv"),
-                     "angles": np.degrees(angle_to_horizontal(last))})
+                     "angles": np.degrees(angle_to_horizontal(last)),
+                     "q_r": (q.centers / length, q.q),
+                     "major": (np.degrees(field.angle_edges), field.angle_hist,
+                               int(np.isfinite(field.major_angle).sum()))})
     if not runs:
         plots.message_figure(a.out, "no successful deposition run to draw: see failures.csv")
         return 0
