@@ -67,11 +67,14 @@ def contacts_vs_phi(runs, out, z_iso=None, phi_min=None):
     """Contact number versus packing fraction: rattler-free (solid markers) and with
     rattlers (open markers), one series per run; ``z_iso`` drawn as a reference. For rods
     a second panel shows the orientational order versus packing fraction: 3-D nematic
-    ``S``, 2-D ``sqrt(N) S_2`` (solid) and ``sqrt(N) S_4`` (open)."""
+    ``S``, 2-D ``sqrt(N) S_2`` (solid) and ``sqrt(N) S_4`` (open). Runs with ``p_c``
+    (``(phi, P(C), rattler-free P(C))`` of the frame nearest to jamming) get a last
+    panel with the contact-number distributions."""
     order = [c for c in ("s_nematic", "sqrt_n_s2", "sqrt_n_s4")
              if any(c in r["curves"] and r["curves"][c].notna().any() for r in runs)]
-    fig, axes = plt.subplots(1, 2 if order else 1, figsize=(11 if order else 6.4, 4.4),
-                             squeeze=False)
+    p_c = [r for r in runs if r.get("p_c") is not None]
+    panels = 1 + bool(order) + bool(p_c)
+    fig, axes = plt.subplots(1, panels, figsize=(5.5 * panels, 4.4), squeeze=False)
     ax = axes[0, 0]
     for r in runs:
         cv = r["curves"]
@@ -100,6 +103,19 @@ def contacts_vs_phi(runs, out, z_iso=None, phi_min=None):
         ax2.set_xlabel(r"packing fraction $\phi$")
         ax2.set_ylabel(" / ".join(order) + " (open: second)")
         ax2.set_title("orientational order (disorder: S ~ 1/sqrt(N))", fontsize=9)
+    if p_c:
+        ax3 = axes[0, panels - 1]
+        for r in p_c:
+            phi, dist, dist_rf = r["p_c"]
+            st = _style(r["engine"], r["seed_index"])
+            ax3.plot(np.arange(len(dist_rf)), dist_rf, marker="o", ms=3, lw=1,
+                     label=f"{r['engine']} seed {r['seed']} ($\\phi$ = {phi:.3f})", **st)
+            ax3.plot(np.arange(len(dist)), dist, marker="o", ms=3, mfc="none", lw=0.5,
+                     alpha=0.6, **st)
+        ax3.set_xlabel("contacts per particle $C$")
+        ax3.set_ylabel("$P(C)$ (filled: rattlers removed)")
+        ax3.set_title("frame nearest to $\\phi_J$", fontsize=9)
+        ax3.legend(fontsize=6)
     _save(fig, out)
 
 

@@ -1,5 +1,6 @@
 """Figures of one study variant with all engines overlaid: pressure and contact number
-versus packing fraction, and phi_J per engine."""
+versus packing fraction, the distribution of contact numbers P(C) in the frame nearest
+to jamming, and phi_J per engine."""
 from __future__ import annotations
 
 import argparse
@@ -7,11 +8,29 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from analysis import plots
 from analysis.compare import per_engine
-from analysis.io import read_thermo
+from analysis.contacts import ContactNumber
+from analysis.io import RunData, read_thermo
+from analysis.packing import packing_fraction
+
+
+def contacts_at_jamming(run_dir: Path, phi_j: float):
+    """``(phi, P(C) with rattlers, P(C) rattler-free)`` of the frame whose packing
+    fraction is nearest to ``phi_j`` (``None`` without frames or ``phi_j``)."""
+    if not np.isfinite(phi_j):
+        return None
+    frames = RunData(run_dir).frames()
+    if not frames:
+        return None
+    phis = np.array([packing_fraction(f) for f, _ in frames])
+    frame, contacts = frames[int(np.argmin(np.abs(phis - phi_j)))]
+    cn = ContactNumber().compute(frame, contacts)
+    return float(phis[np.argmin(np.abs(phis - phi_j))]), cn.distribution, \
+        cn.distribution_rattler_free
 
 
 def main(argv=None) -> int:
@@ -39,7 +58,8 @@ def main(argv=None) -> int:
         runs.append({"engine": engine, "seed": seed, "thermo": read_thermo(d / "thermo.dat"),
                      "curves": pd.read_csv(d / "curves.csv"),
                      "phi_j": val.get("phi_j", float("nan")),
-                     "slope": val.get("jamming_slope", float("nan"))})
+                     "slope": val.get("jamming_slope", float("nan")),
+                     "p_c": contacts_at_jamming(d, val.get("phi_j", float("nan")))})
     for r in runs:
         r["seed_index"] = sorted(seeds[r["engine"]]).index(r["seed"])
     if not runs:
