@@ -99,7 +99,8 @@ def rebuild(x, u, box, periodic, r_int, half, sys, old_istart, old_pj, old_hist,
     hist = transfer_rows(old_istart, old_pj, old_hist, istart, pj)
     if fj.shape[0] < pj.shape[0] or fj.shape[1] < PAIR_SCRATCH:  # scratch with 10 % to spare
         fj = np.empty((pj.shape[0] + pj.shape[0] // 10 + 16, PAIR_SCRATCH))
-    spine_separations(x, u, half, box, periodic, pi, pj, fj[:, SEP])
+    if sys[RODS] != 0.0:  # only the rod loop skips pairs by their separation
+        spine_separations(x, u, half, box, periodic, pi, pj, fj[:, SEP])
     x_ref[:, :] = x
     if u_ref.shape[0] == u.shape[0]:
         u_ref[:, :] = u
