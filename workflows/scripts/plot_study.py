@@ -27,10 +27,9 @@ def contacts_at_jamming(run_dir: Path, phi_j: float):
     if not frames:
         return None
     phis = np.array([packing_fraction(f) for f, _ in frames])
-    frame, contacts = frames[int(np.argmin(np.abs(phis - phi_j)))]
-    cn = ContactNumber().compute(frame, contacts)
-    return float(phis[np.argmin(np.abs(phis - phi_j))]), cn.distribution, \
-        cn.distribution_rattler_free
+    k = int(np.argmin(np.abs(phis - phi_j)))
+    cn = ContactNumber().compute(*frames[k])
+    return float(phis[k]), cn.distribution, cn.distribution_rattler_free
 
 
 def main(argv=None) -> int:
