@@ -311,17 +311,20 @@ def deposit_profiles(runs, out):
     a thin line) versus the depth ``x = h / W``, the distribution of the angle between
     spines and the horizontal, the radial orientation correlation ``Q(r)`` and the
     distribution of the angle between the major (most compressive) principal stress of
-    each coarse-graining element and the horizontal; one colour per variant, solid
-    pysim, dashed LAMMPS.
+    each coarse-graining element and the horizontal, and the Janssen apparent mass
+    (``sigma_vv W^(d-1) / g`` against the grain mass above each slab, the diagonal
+    being a column whose walls hold nothing); one colour per variant, solid pysim,
+    dashed LAMMPS.
 
     ``runs``: dicts with ``label``, ``engine``, ``index`` (colour), ``profile``
     (:func:`analysis.summary.analyse_deposit`), ``angles`` (degrees, final frame) and,
     optionally, ``q_r`` (``(r / length, Q)``) and ``major`` (``(edges in degrees,
     density, elements)``).
     """
-    fig, axes = plt.subplots(2, 3, figsize=(14, 8))
+    fig, axes = plt.subplots(2, 4, figsize=(18, 8))
     axes = axes.ravel()
     cmap = plt.get_cmap("tab10")
+    top_mass = 0.0
     for r in runs:
         pr = r["profile"]
         color = cmap(r["index"] % 10)
@@ -338,6 +341,9 @@ def deposit_profiles(runs, out):
         if "major" in r and r["major"][2] > 0:
             edges, dens, _ = r["major"]
             axes[5].stairs(dens * np.pi / 180, edges, color=color, ls=ls)
+        if "apparent_mass" in pr:
+            axes[6].plot(pr.mass_above, pr.apparent_mass, color=color, ls=ls, marker=".")
+            top_mass = max(top_mass, float(np.nanmax(pr.mass_above, initial=0.0)))
     for ax, label in zip(axes[:3], [r"packing fraction $\phi$", r"vertical stress $\sigma_{vv}$",
                                     r"horizontal stress $\sigma_{hh}$"]):
         ax.set_xlabel(label)
@@ -358,7 +364,15 @@ def deposit_profiles(runs, out):
     axes[5].set_xlabel("major principal stress axis to the horizontal (deg)")
     axes[5].set_ylabel("probability density (1/deg)")
     axes[5].set_title("elements of 5 particle lengths (non-empty)", fontsize=8)
-    axes[0].legend(fontsize=6)
+    axes[6].plot([0, top_mass], [0, top_mass], color="grey", lw=0.8, ls=":",
+                 label="walls hold nothing")
+    axes[6].set_xlabel("grain mass above the slab centre")
+    axes[6].set_ylabel(r"apparent mass $\sigma_{vv} W^{d-1} / g$")
+    axes[6].set_title("Janssen: saturates when the walls hold weight", fontsize=8)
+    axes[6].legend(fontsize=6)
+    handles, labels = axes[0].get_legend_handles_labels()
+    axes[7].axis("off")
+    axes[7].legend(handles, labels, fontsize=7, loc="upper left")
     fig.suptitle("deposits: profiles versus depth (solid pysim, dashed LAMMPS)", fontsize=9)
     fig.tight_layout()
     _save(fig, out)

@@ -127,7 +127,10 @@ class StressProfile(Observable):
 
     Parameters: slab ``thickness`` (tiling the box from its bottom) or ``edges`` along
     the vertical axis; ``top`` the reference height of depth 0 (default the top surface
-    of the grains, :func:`analysis.packing.surface_height`). Results: ``edges``,
+    of the grains, :func:`analysis.packing.surface_height`); ``area`` the horizontal
+    cross-section the grains fill (2-D: a width; default the box's; give the container's
+    when the box is wider than it, so that a slab's measure is ``area * thickness``).
+    Results: ``edges``,
     ``centers``, ``depth`` (``top - centre``), ``sigma`` (K, 3, 3), ``pressure`` (K,),
     ``sigma_vv`` (K,) vertical normal stress, ``sigma_hh`` (K,) mean horizontal normal
     stress, ``k_ratio`` (K,) ``sigma_hh / sigma_vv`` (Janssen's ``K``), ``count`` (K,)
@@ -137,15 +140,18 @@ class StressProfile(Observable):
     _results = ("edges", "centers", "depth", "sigma", "pressure", "sigma_vv", "sigma_hh",
                 "k_ratio", "count")
 
-    def __init__(self, thickness: float | None = None, edges=None, top: float | None = None):
+    def __init__(self, thickness: float | None = None, edges=None, top: float | None = None,
+                 area: float | None = None):
         if (thickness is None) == (edges is None):
             raise ValueError("give exactly one of thickness or edges")
         if thickness is not None and not thickness > 0:
             raise ValueError(f"thickness must be > 0, got {thickness}")
-        self.thickness, self.slab_edges, self.top = thickness, edges, top
+        if area is not None and not area > 0:
+            raise ValueError(f"area must be > 0, got {area}")
+        self.thickness, self.slab_edges, self.top, self.area = thickness, edges, top, area
 
     def compute(self, frame: Frame, contacts: Contacts):
-        from analysis.packing import surface_height
+        from analysis.packing import horizontal_area, surface_height
 
         v, d = frame.vertical, frame.dim
         if self.slab_edges is not None:
@@ -157,6 +163,8 @@ class StressProfile(Observable):
         spec[v] = edges
         sig, cnt = coarse_grain(frame, particle_stress(frame, contacts), spec)
         sig = sig.reshape(len(edges) - 1, 3, 3)
+        if self.area is not None:  # coarse_grain divided by the box's cross-section
+            sig = sig * (horizontal_area(frame) / self.area)
         cnt = cnt.reshape(-1)
         horiz = [k for k in range(d) if k != v]
         s_vv = sig[:, v, v]

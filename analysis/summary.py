@@ -286,11 +286,14 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
 
     Returns ``(rows, profile)``: rows ``(observable, value, uncertainty)`` and a table of
     the slab profile (``depth``, ``x``, ``phi``, ``sigma_vv``, ``sigma_hh``, ``pressure``,
-    ``count`` and the fitted curves).
+    ``count``, the fitted curves, and the Janssen apparent mass of every engine:
+    ``mass_above``, the grain mass above the slab centre, and ``apparent_mass`` =
+    ``sigma_vv W^(d-1) / g``, the part of it the grains below carry; equal without wall
+    friction, saturating with depth when the walls hold weight).
     """
     from analysis.janssen import JanssenFit, JanssenFitError, janssen
     from analysis.order import AngleToHorizontal
-    from analysis.packing import FilledPackingFraction, slab_packing_fraction
+    from analysis.packing import FilledPackingFraction, cumulative_measure, slab_packing_fraction
     from analysis.stress import StressProfile
 
     run = RunData(run_dir)
@@ -304,11 +307,14 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
     ang = AngleToHorizontal().compute(frame)
     k = max(int(np.floor(fill.top / slab)), 1)
     edges = slab * np.arange(k + 1)
-    sp = StressProfile(edges=edges, top=fill.top).compute(frame, contacts)
+    sp = StressProfile(edges=edges, top=fill.top, area=area).compute(frame, contacts)
     phi_slab = slab_packing_fraction(frame, edges, area=area)
     prof = pd.DataFrame({"depth": sp.depth, "x": sp.depth / width, "phi": phi_slab,
                          "sigma_vv": -sp.sigma_vv, "sigma_hh": -sp.sigma_hh,
                          "pressure": sp.pressure, "count": sp.count})
+    total = float(np.sum(frame.particle_measures()))
+    prof["mass_above"] = density * (total - cumulative_measure(frame, sp.centers))
+    prof["apparent_mass"] = prof["sigma_vv"] * area / gravity
     use = (prof["count"] >= 3) & (prof["depth"] > 0.5 * slab)
     rows = [("phi_deposit", float(fill.phi), np.nan),
             ("height", float(fill.height), np.nan),

@@ -90,6 +90,16 @@ def test_column_under_gravity_with_a_floor():
     np.testing.assert_allclose(prof.sigma_vv[:n_layers], expect / 1.0, rtol=1e-12)
     np.testing.assert_allclose(prof.sigma_hh[:n_layers], 0.0, atol=1e-12)
     np.testing.assert_allclose(prof.depth[:n_layers], n_layers - np.arange(n_layers) - 0.5)
+    # the grains fill a cross-section of 16: a slab's measure is 16 x thickness however
+    # wide the box; the same stack read in a box of twice the area keeps its stresses
+    wide = frame_of(x, 0.5, [8.0, 4.0, 10.0], periodic=(False, True, False))
+    inner = (x[:, 0] > 0.5) & (x[:, 0] < 3.5)  # bonds across x = 0 would wrap at 8: drop
+    keep = np.isin(c.i, fr.ids[inner]) & (np.isin(c.j, fr.ids[inner]) | (c.j <= 0))
+    sub = c.subset(np.nonzero(keep)[0])
+    a = StressProfile(thickness=1.0, top=float(n_layers)).compute(fr, sub)
+    b = StressProfile(thickness=1.0, top=float(n_layers), area=16.0).compute(wide, sub)
+    assert np.abs(a.sigma_vv).max() > mg  # the kept bonds still carry load
+    np.testing.assert_allclose(b.sigma, a.sigma, rtol=1e-12, atol=1e-12)
     ws = WallStress(PlaneWall((0, 0, 0), (0, 0, 1)), area=16.0).compute(fr, c)
     assert ws.normal_force == pytest.approx(fr.n * mg)
     assert ws.sigma_n == pytest.approx(fr.n * mg / 16.0) and ws.tau == pytest.approx(-fr.n * mg / 16)

@@ -120,6 +120,10 @@ def test_smooth_walls_put_the_whole_weight_on_the_base(deposits):
     # stresses grow with depth and are compressive
     deep = prof[prof["count"] >= 3].sort_values("depth")
     assert (deep.sigma_vv > 0).all() and deep.sigma_vv.iloc[-1] > deep.sigma_vv.iloc[0]
+    # and the vertical stress in every slab carries the mass above it (sigma_vv W^2 / g,
+    # the slab's particle-centre average: within 10 %; the box is wider than the
+    # container, so this needs the container's cross-section)
+    np.testing.assert_allclose(deep.apparent_mass, deep.mass_above, rtol=0.1)
 
 
 def test_cohesion_makes_the_deposit_looser(deposits):
