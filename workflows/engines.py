@@ -327,6 +327,25 @@ def _error_line(text: str) -> str | None:
     return None
 
 
+#: what a peer's error line has meant in our decks, added to the failure message
+ERROR_HINTS = {
+    "Rigid body atoms": "glued rods blew up: the sphere contacts between two rods (up to "
+                        "tens of them) act as parallel springs and dashpots, and the time "
+                        "step was too large for them (tapping at spacing D/4 and dt 2e-5 s: "
+                        "speeds grew a thousandfold in 15 steps); try a smaller protocol.dt",
+}
+
+
+def failure_message(engine: str, returncode: int, text: str, screen: Path) -> str:
+    """One line for a failed peer run: exit code, the engine's first ``ERROR`` line (or
+    its last line), a hint where :data:`ERROR_HINTS` knows the error, and the log."""
+    err = _error_line(text)
+    line = err or (text.strip().splitlines()[-1] if text.strip() else "no output")
+    hints = [h for key, h in ERROR_HINTS.items() if key in line]
+    return (f"{engine} failed (exit {returncode}): {line}"
+            + "".join(f" ({h})" for h in hints) + f"; log: {screen}")
+
+
 def resume_stamp(engine: str, case: dict, data) -> dict:
     """What identifies a run for resuming (``resume.json``): engine, case hash and the
     initial data's hash."""
@@ -395,11 +414,8 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
                               f"log: {screen_path}") from None
     wall = time.perf_counter() - t0
     text = screen_path.read_text(errors="replace")
-    err = _error_line(text)
-    if proc.returncode != 0 or err:
-        raise EngineError(f"{engine} failed (exit {proc.returncode}): "
-                          f"{err or text.strip().splitlines()[-1] if text.strip() else 'no output'}; "
-                          f"log: {screen_path}")
+    if proc.returncode != 0 or _error_line(text):
+        raise EngineError(failure_message(engine, proc.returncode, text, screen_path))
     if "Lost atoms" in text:
         raise EngineError(f"{engine} lost atoms; log: {screen_path}")
     dangerous = sum(int(m) for m in re.findall(r"Dangerous builds\s*=\s*(\d+)", text))

