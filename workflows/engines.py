@@ -70,10 +70,10 @@ def supports(engine: str, case: dict) -> str | None:
             return f"the {engine} tapping deck is for rods (aspect_ratio > 0)"
         return None
     if name == "deposit":
-        if engine == "liggghts":
-            return "no LIGGGHTS deposition deck yet"
         if k != "rods":
             return f"the {engine} deposition deck is for 3-D rods (aspect_ratio > 0, dimension 3)"
+        if engine == "liggghts":
+            return liggghts_deposit_support(case)
         return None
     if name != "compress":
         return (f"{engine} runs only the 'compress', 'tapping' and 'deposit' protocols here, "
@@ -183,6 +183,145 @@ def deposit_deck_vars(case: dict) -> dict[str, str]:
     return {k: repr(float(x)) if isinstance(x, float) else str(x) for k, x in v.items()}
 
 
+# -- LIGGGHTS deposition: multisphere rods (inputs/liggghts/in.rods.deposit) ---------------------
+#: the smallest restitution coefficient passed to LIGGGHTS (its damping needs e > 0; pysim's
+#: law with a constant gamma_n stops rebounding altogether below some impact speed)
+E_MIN = 0.01
+#: how full LIGGGHTS' insertion may make the column its rods' centres can use (rod volume
+#: over that column's volume): fix insert/pack keeps a rod's bounding sphere (diameter
+#: L + D) inside the region, so the centres of rods of d = 5 in a box of width 8 D share a
+#: 3 D x 3 D column; measured: 84 of 150 such rods placed at 0.80, all 150 at 0.72
+PHI_INSERT = 0.6
+
+
+def liggghts_deposit_support(case: dict) -> str | None:
+    """``None`` when ``in.rods.deposit`` of LIGGGHTS can run a (3-D rod) deposition case,
+    else the reason."""
+    p, c = case["particles"], case["contact"]
+    if p["diameter"].get("distribution", "mono") != "mono":
+        return "the LIGGGHTS deposition deck has one rod template: equal diameters (mono) only"
+    if c["law"] != "hertz":
+        return (f"the LIGGGHTS deposition deck maps pysim's Hertz law only (got law "
+                f"{c['law']})")
+    d = p["diameter"]["mean"]
+    if not case["container"]["width"] > (1.0 + p["aspect_ratio"]) * d:
+        return ("LIGGGHTS inserts a rod only where its bounding sphere (diameter L + D) fits "
+                "between the walls: the box width must exceed L + D")
+    return None
+
+
+def hertz_restitution(k_n: float, gamma_n: float, m_eff: float, v: float) -> float:
+    """Restitution coefficient of pysim's normal law ``f = k_n delta^(3/2) + gamma_n
+    d(delta)/dt`` (damping not clipped, as pysim) in a head-on collision of effective mass
+    ``m_eff`` at impact speed ``v``: minus the overlap rate when the overlap returns to zero,
+    over ``v``; 0 when it does not return within 50 undamped contact times."""
+    from scipy.integrate import solve_ivp
+
+    if gamma_n <= 0:
+        return 1.0
+
+    def rhs(_t, y):
+        return [y[1], -(k_n * max(y[0], 0.0) ** 1.5 + gamma_n * y[1]) / m_eff]
+
+    def leaves(_t, y):
+        return y[0]
+
+    leaves.terminal, leaves.direction = True, -1
+    t_c = 3.2 * (m_eff**2 / (k_n**2 * v)) ** 0.2  # undamped Hertz contact time (2.94...)
+    sol = solve_ivp(rhs, [0.0, 50.0 * t_c], [0.0, v], events=leaves, rtol=1e-10, atol=1e-14,
+                    max_step=t_c / 200.0)
+    if sol.t_events[0].size == 0:
+        return 0.0
+    return float(-sol.y_events[0][0][1] / v)
+
+
+def liggghts_column_height(case: dict) -> float:
+    """Height of the column LIGGGHTS inserts the rods into: pysim's column (packing
+    fraction ``phi_init``, :func:`pysim.initial.random_spherocylinders_in_box`) for the rod
+    centres, raised where fix insert/pack cannot place them that densely
+    (:data:`PHI_INSERT`), plus one bounding-sphere diameter ``L + D``."""
+    from pysim.protocols.deposit import grain_mass
+
+    p = case["particles"]
+    d = p["diameter"]["mean"]
+    length = p["aspect_ratio"] * d
+    w = case["container"]["width"]
+    n = p["n"]
+    volume = grain_mass(case) / p.get("density", 1.0)
+    reach = length + d  # bounding-sphere diameter
+    column = max(n * volume / (case["protocol"]["phi_init"] * w * w), reach)
+    centres = (w - reach) ** 2  # area the bounding spheres' centres can use
+    return max(column, n * volume / (PHI_INSERT * centres)) + reach
+
+
+def _insertion_seed(seed: int) -> int:
+    """A prime above 10000 for LIGGGHTS' insertion (its seeds must be primes > 10000),
+    one per case seed."""
+    k = 10007 + 1000 * int(seed)
+    while any(k % f == 0 for f in range(2, int(k**0.5) + 1)):
+        k += 1
+    return k
+
+
+def liggghts_deposit_vars(case: dict) -> dict[str, str]:
+    """``-var`` values of LIGGGHTS' deposition deck (``inputs/liggghts/in.rods.deposit``).
+
+    The rods are multisphere templates of :func:`glued_spheres` spheres with the mass and
+    inertia of the solid spherocylinder; the deck maps pysim's contact law to LIGGGHTS'
+    material constants (see its header):
+
+    * Hertz stiffness ``k_n`` (``f = k_n delta^(3/2)``): exact, through Young's moduli of
+      grains and walls computed in the deck (``4/3 Y* sqrt(R*) = k_n`` for sphere-sphere and
+      sphere-wall contacts, Poisson ratio 0);
+    * damping: not matched (LIGGGHTS' Hertz damping gives a speed-independent restitution,
+      pysim's constant ``gamma_n`` one that falls with the speed): ``e_n`` and ``e_wall``
+      are pysim's restitution (:func:`hertz_restitution`) of a head-on rod-rod
+      (``m_eff = m/2``) and rod-wall (``m_eff = m``) collision at the reference speed
+      ``sqrt(g h)``, ``h`` the insertion column's height (:func:`liggghts_column_height`),
+      floored at :data:`E_MIN`;
+    * tangential spring: not matched (LIGGGHTS: Mindlin stiffness from the Poisson ratio,
+      not pysim's ``k_t``, ``gamma_t``); friction ``mu`` and ``mu_wall`` as pysim's;
+    * cohesion ``F_c = Bo_g m g`` (:func:`pysim.protocols.deposit.cohesion`), approximate:
+      the deck sets sjkr's ``cohesionEnergyDensity`` so that the largest tensile force of a
+      sphere-sphere contact is ``F_c`` (sjkr acts only on overlapping spheres, in
+      proportion to the contact area; no range ``d_c``, no cohesion with the walls).
+
+    The rods are inserted at random (not pysim's start), with Gaussian velocities of rms
+    speed ``v_init``; the settling test is pysim's (:mod:`pysim.protocols.deposit`).
+    """
+    from pysim.protocols.deposit import cohesion, grain_mass
+
+    p, c, pr = case["particles"], case["contact"], case["protocol"]
+    reason = liggghts_deposit_support(case)
+    if reason:
+        raise EngineError(reason)
+    out = case.get("output", {})
+    d = p["diameter"]["mean"]
+    length = p["aspect_ratio"] * d
+    height = liggghts_column_height(case)
+    m = grain_mass(case)
+    v_ref = float(np.sqrt(case["gravity"] * height))
+    gamma_n = c.get("gamma_n", 0.0)
+    e_n = max(hertz_restitution(c["k_n"], gamma_n, m / 2, v_ref), E_MIN)
+    e_wall = max(hertz_restitution(c["k_n"], gamma_n, m, v_ref), E_MIN)
+    f_c, _d_c = cohesion(case)
+    every = out.get("thermo_every", 1000)
+    dt = pr["dt"]
+    v = {"width": case["container"]["width"], "height": height, "n_rods": p["n"],
+         "radius": d / 2, "length": length,
+         "spheres": glued_spheres(length, d, p.get("glued_spacing", 0.25)),
+         "density": p.get("density", 1.0), "k_n": c["k_n"], "e_n": e_n, "e_wall": e_wall,
+         "mu": c.get("friction", 0.0), "mu_wall": c.get("wall_friction", c.get("friction", 0.0)),
+         "f_coh": f_c, "g": case["gravity"], "v_init": pr.get("v_init", 0.0),
+         "seed": _insertion_seed(case.get("seed", 1)), "dt": dt,
+         "check_every": every, "thermo_every": every,
+         "min_steps": int(np.ceil(pr.get("min_time", 0.0) / dt)),
+         "max_steps": int(np.ceil(pr["max_time"] / dt)),
+         "settle_ratio": pr.get("ke_ratio", 1e-6), "dump_every": out.get("dump_every", 4000),
+         "skin": 0.2 * d}
+    return {k: repr(float(x)) if isinstance(x, float) else str(x) for k, x in v.items()}
+
+
 def _ke_peak(screen: Path, step: int) -> float:
     """Running peak of the kinetic energy printed by the deposition deck at its last
     check at or before ``step`` (``rodpack: step S ke K peak P``); 0 when none."""
@@ -238,7 +377,7 @@ def deck_vars(case: dict, engine: str) -> dict[str, str]:
     if case["protocol"]["name"] == "tapping":
         return tap_deck_vars(case)
     if case["protocol"]["name"] == "deposit":
-        return deposit_deck_vars(case)
+        return liggghts_deposit_vars(case) if engine == "liggghts" else deposit_deck_vars(case)
     if kind(case) == "2d":
         v = deck_vars_2d(case)
         if engine == "lammps-body":  # one body per rod: no disks, no ghost cutoff, masses
@@ -387,7 +526,11 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
         extra["restart_every"] = restart_interval(case)
     engine_data = Path(data).resolve()
     body = engine == "lammps-body"
-    glued = kind(case) in ("rods", "2d") and not body
+    # LIGGGHTS rods: multisphere bodies inserted by the deck itself (no data file)
+    multisphere = engine == "liggghts" and kind(case) == "rods"
+    if multisphere:
+        ranks = 1  # the PUBLIC version runs multisphere bodies on one rank only
+    glued = kind(case) in ("rods", "2d") and not body and not multisphere
     if body:
         engine_data = (work / "bodies.data").resolve()
         if restart is None or not engine_data.exists():
@@ -435,6 +578,11 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     elif glued:
         stats = convert_glued_rods(work / "contacts.native", particles, work / "contacts.dump",
                                    work / "rods.dump")
+        os.replace(work / "rods.dump", particles)
+    elif multisphere:
+        stats = convert_multisphere_rods(work / "contacts.native", particles,
+                                         work / "contacts.dump", work / "rods.dump",
+                                         float(case["container"]["width"]))
         os.replace(work / "rods.dump", particles)
     else:
         convert = convert_lammps_contacts if engine == "lammps" else convert_liggghts_contacts
@@ -610,6 +758,93 @@ def convert_glued_rods(native: Path, particles: Path, out_contacts: Path, out_pa
                               rods.box_lo + np.mod(rods.x - rods.box_lo, rods.box), rods.x)
             io.write_particles_frame(fp, step, rods.box, rods.periodic, rods.ids, rods.types,
                                      centre, rods.radius, axis=rods.axis, length=rods.length,
+                                     box_lo=rods.box_lo)
+            rec = np.column_stack([merged.point, merged.normal, merged.overlap, merged.force])
+            io.write_contacts_frame(fc, step, rods.box, rods.periodic,
+                                    np.column_stack([merged.i, merged.j]), rec, box_lo=rods.box_lo)
+    io.finalize(out_contacts)
+    io.finalize(out_particles)
+    return {"dropped": dropped}
+
+
+#: LIGGGHTS deposition walls as the deck names them (fix wall/gran ... store_force yes), in
+#: pysim's order (wall id -(k + 1)): (fix id, axis, at the far side x = W)
+MULTISPHERE_WALLS = (("wx0", 0, False), ("wx1", 0, True), ("wy0", 1, False), ("wy1", 1, True),
+                     ("wz0", 2, False))
+
+
+def multisphere_wall_contacts(frame, table, cols, width: float):
+    """Sphere-wall contacts of LIGGGHTS' deposition deck from the wall forces it stores on
+    each sphere (``f_force_<wall>[1..3]`` columns of the sphere dump, rows in ``frame``
+    order): one row per sphere and wall with a nonzero force, ``j`` the wall id of
+    :data:`MULTISPHERE_WALLS` (pysim's numbering: x = 0, x = W, y = 0, y = W, base), normal
+    from the sphere to the wall, overlap ``R - distance``, point in the middle of the
+    overlap, force on the sphere. Returns a :class:`analysis.frame.Contacts`."""
+    from analysis.frame import Contacts
+
+    c = {name: k for k, name in enumerate(cols)}
+    rows = []
+    for w, (fix, axis, far) in enumerate(MULTISPHERE_WALLS):
+        force = table[:, [c[f"f_force_{fix}[{k}]"] for k in (1, 2, 3)]]
+        on = np.flatnonzero(np.any(force != 0.0, axis=1))
+        normal = np.zeros((len(on), 3))
+        normal[:, axis] = 1.0 if far else -1.0
+        gap = (width - frame.x[on, axis]) if far else frame.x[on, axis]
+        overlap = frame.radius[on] - gap
+        point = frame.x[on] + (frame.radius[on] - 0.5 * overlap)[:, None] * normal
+        rows.append((frame.ids[on], np.full(len(on), -(w + 1)), point, normal, overlap,
+                     force[on]))
+    i, j, point, normal, overlap, force = (np.concatenate(x) for x in zip(*rows))
+    return Contacts(frame.step, i.astype(np.int64), j.astype(np.int64), point, normal, overlap,
+                    force)
+
+
+def convert_multisphere_rods(native: Path, particles: Path, out_contacts: Path,
+                             out_particles: Path, width: float) -> dict:
+    """Output of LIGGGHTS' deposition deck (multisphere rods) -> rods and contacts in the
+    common format.
+
+    The sphere dump (``id id_multisphere type x y z radius f_force_<wall>[1..3]``) becomes
+    rods as the LAMMPS glued rods do (:func:`analysis.contacts.glued_bodies` with the body
+    id ``id_multisphere``: centre, axis from the sphere centres, spine length, id = body
+    id); the sphere-sphere contacts (``compute pair/gran/local pos id force delta``,
+    geometry recomputed from the frame) and the sphere-wall contacts
+    (:func:`multisphere_wall_contacts`) merge per rod pair and per rod and wall
+    (:func:`analysis.contacts.merge_glued_contacts`).
+    """
+    from analysis.contacts import glued_bodies, merge_glued_contacts
+    from analysis.frame import Contacts
+    from analysis.io import read_particle_frames
+
+    spheres = {f.step: f for f in read_particle_frames(particles)}
+    body, walls = {}, {}
+    for step, _b, _p, cols, table in _iter_dump(particles):
+        c = {name: k for k, name in enumerate(cols)}
+        order = np.argsort(table[:, c["id"]], kind="stable")
+        body[step] = table[order, c["id_multisphere"]].astype(np.int64)
+        walls[step] = multisphere_wall_contacts(spheres[step], table[order], cols, width)
+    dropped = 0
+    with open(io.part_path(out_contacts), "w") as fc, open(io.part_path(out_particles), "w") as fp:
+        for step, _box, _cols, table in _iter_local(native):
+            if step not in spheres:
+                raise EngineError(f"{native}: contact frame at step {step} has no particle "
+                                  f"frame in {particles}")
+            fr = spheres[step]
+            ids_i, ids_j = table[:, 6], table[:, 7]
+            n, delta, point = _geometry(fr, ids_i, ids_j)
+            keep = delta > 0
+            dropped += int(np.count_nonzero(~keep))
+            w = walls[step]
+            sph = Contacts(step, np.concatenate([ids_i[keep].astype(np.int64), w.i]),
+                           np.concatenate([ids_j[keep].astype(np.int64), w.j]),
+                           np.concatenate([point[keep], w.point]),
+                           np.concatenate([n[keep], w.normal]),
+                           np.concatenate([delta[keep], w.overlap]),
+                           np.concatenate([table[keep, 9:12], w.force]))
+            rods, _ = glued_bodies(fr, body[step])
+            merged, _ = merge_glued_contacts(fr, sph, body[step])
+            io.write_particles_frame(fp, step, rods.box, rods.periodic, rods.ids, rods.types,
+                                     rods.x, rods.radius, axis=rods.axis, length=rods.length,
                                      box_lo=rods.box_lo)
             rec = np.column_stack([merged.point, merged.normal, merged.overlap, merged.force])
             io.write_contacts_frame(fc, step, rods.box, rods.periodic,
