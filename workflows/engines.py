@@ -159,7 +159,7 @@ def deposit_deck_vars(case: dict) -> dict[str, str]:
     stiffness (the deck converts it to LAMMPS' ``k_N = k_n / sqrt(R_eff)``), the cohesive
     force ``F_c = Bo_g m g`` per sphere pair within ``d_c``, and the settling test of
     :mod:`pysim.protocols.deposit` at every ``thermo.dat`` row."""
-    from pysim.protocols.deposit import cohesion
+    from pysim.protocols.deposit import cohesion, rain_drag
 
     c, pr = case["contact"], case["protocol"]
     out = case.get("output", {})
@@ -167,6 +167,7 @@ def deposit_deck_vars(case: dict) -> dict[str, str]:
     f_c, d_c = cohesion(case)
     every = out.get("thermo_every", 1000)
     dt = pr["dt"]
+    rain_steps = int(round(pr.get("rain_time", 0.0) / dt))
     d = case["particles"]["diameter"]["mean"]
     v = {"width": case["container"]["width"], "k_n": c["k_n"], "gamma_n": gamma_n,
          "k_t": c.get("k_t", 0.0),
@@ -174,9 +175,10 @@ def deposit_deck_vars(case: dict) -> dict[str, str]:
          "mu": c.get("friction", 0.0), "mu_wall": c.get("wall_friction", c.get("friction", 0.0)),
          "f_coh": f_c, "d_coh": d_c, "g": case["gravity"], "dt": dt,
          "check_every": every, "thermo_every": every,
-         "min_steps": int(np.ceil(pr.get("min_time", 0.0) / dt)),
+         "min_steps": max(int(np.ceil(pr.get("min_time", 0.0) / dt)), rain_steps),
          "max_steps": int(np.ceil(pr["max_time"] / dt)),
          "settle_ratio": pr.get("ke_ratio", 1e-6), "dump_every": out.get("dump_every", 4000),
+         "drag": rain_drag(case)[0], "rain_steps": rain_steps,
          "skin": 0.2 * d, **_rod_vars(case)}
     if case["particles"]["diameter"].get("distribution", "mono") != "mono":
         raise EngineError("the LAMMPS deposition deck needs equal spheres (mono diameters)")
@@ -203,6 +205,9 @@ def liggghts_deposit_support(case: dict) -> str | None:
     if c["law"] != "hertz":
         return (f"the LIGGGHTS deposition deck maps pysim's Hertz law only (got law "
                 f"{c['law']})")
+    if "rain_speed" in case["protocol"]:
+        return "the LIGGGHTS deposition deck has no rain drag (protocol.rain_speed)"
+
     d = p["diameter"]["mean"]
     if not case["container"]["width"] > (1.0 + p["aspect_ratio"]) * d:
         return ("LIGGGHTS inserts a rod only where its bounding sphere (diameter L + D) fits "

@@ -5,7 +5,10 @@ Grains start as a dilute random column in the box ``0 < x (, y) < W`` above the 
 random velocities (``protocol.v_init``), written by :func:`pysim.initial.write_initial`.
 Under gravity the column falls as a whole, so grains reach the growing heap one after the
 other at a rate set by the column's density ``phi_init`` (a rain, not an inlet: pysim
-keeps a fixed set of particles). Side walls and base are flat, frictional walls with the
+keeps a fixed set of particles). With ``protocol.rain_speed`` the rain is slowed for
+``rain_time``: a background drag caps every grain's fall speed at ``rain_speed``
+(:func:`rain_drag`), so grains land gently, at a low rate ``phi_init rain_speed`` per area,
+as from a slow feed; then the drag is off. Side walls and base are flat, frictional walls with the
 grains' contact law (``contact.wall_friction``, default ``friction``). Cohesion: a
 constant attraction ``F_c = Bo_g m g`` (mean grain) between grains whose gap is below
 ``d_c = cohesion_range D`` (:func:`cohesion`).
@@ -55,6 +58,18 @@ def cohesion(case: dict) -> tuple[float, float]:
         return 0.0, 0.0
     d_c = c.get("cohesion_range", 1e-4) * case["particles"]["diameter"]["mean"]
     return bo * grain_mass(case) * case["gravity"], d_c
+
+
+def rain_drag(case: dict) -> tuple[float, float]:
+    """``(gamma_bg, gamma_rot)`` while it rains: ``m g / rain_speed`` for the mean grain
+    (:func:`grain_mass`: terminal fall speed ``rain_speed``) and ``gamma_bg L^2 / 12`` for
+    its rotation; ``(0, 0)`` without ``protocol.rain_speed`` (free fall)."""
+    v_s = case["protocol"].get("rain_speed")
+    if v_s is None:
+        return 0.0, 0.0
+    gamma = grain_mass(case) * case["gravity"] / v_s
+    length = case["particles"].get("aspect_ratio", 0.0) * case["particles"]["diameter"]["mean"]
+    return gamma, gamma * length**2 / 12.0
 
 
 def simulation_from_case(case: dict, init: dict) -> Simulation:
@@ -116,6 +131,8 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     max_steps = int(math.ceil(pr["max_time"] / dt))
     min_steps = int(math.ceil(pr.get("min_time", 0.0) / dt))
     ratio = pr.get("ke_ratio", 1e-6)
+    rain_steps = int(round(pr.get("rain_time", 0.0) / dt))
+    drag = rain_drag(case)
     files = RunFiles(out_dir, init["ids"], origin=init["box_lo"])
     if resume:
         sim, drv = files.resume()
@@ -124,6 +141,8 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
         files.start()
         drv = {"peak": 0.0}
     s = sim.state
+    free = (sim.model.gamma_bg, sim.model.gamma_rot)  # the case's own drag, after the rain
+    sim.set_drag(*(drag if s.step < rain_steps else free))
     t0 = time.perf_counter()
     last_ckpt = t0
     steps_at_start = s.step
@@ -140,15 +159,19 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
         while s.step < max_steps:
             nxt = min(max_steps, (s.step // thermo_every + 1) * thermo_every,
                       (s.step // dump_every + 1) * dump_every)
+            if s.step < rain_steps:
+                nxt = min(nxt, rain_steps)
             before = s.step
             sim.run(nxt - s.step)
+            if s.step == rain_steps:
+                sim.set_drag(*free)
             bar.update(s.step - before)
             if s.step % thermo_every == 0 or s.step == max_steps:
                 th = sim.thermo()
                 drv["peak"] = max(drv["peak"], th.ke)
                 files.thermo((th.step, th.time, math.nan, math.nan, th.ke, th.pe, th.n_contacts))
                 bar.set_postfix(ke=f"{th.ke:.3g}", peak=f"{drv['peak']:.3g}", refresh=False)
-                settled = s.step >= min_steps and th.ke < ratio * drv["peak"]
+                settled = s.step >= max(min_steps, rain_steps) and th.ke < ratio * drv["peak"]
             if s.step % dump_every == 0 or settled or s.step == max_steps:
                 files.dump(sim)
             if settled:

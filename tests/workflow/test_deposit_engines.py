@@ -91,3 +91,27 @@ def test_lammps_deposit_resumes(dep_case, tmp_path):
     assert list(a.thermo.step) == list(b.thermo.step)
     assert [f.step for f, _ in a.frames()] == [f.step for f, _ in b.frames()]
     np.testing.assert_allclose(a.frames()[-1][0].x, b.frames()[-1][0].x, atol=1e-6)
+
+
+@pytest.mark.engines
+def test_lammps_deposit_rain_drag(dep_case, tmp_path):
+    """protocol.rain_speed on LAMMPS: fix viscous on the spheres caps the rods' fall speed
+    until rain_time, as in pysim (kinetic energy below that of every rod at rain_speed;
+    free fall from this column: far above), then it is removed and the deposit settles."""
+    from pysim.protocols.deposit import grain_mass
+
+    _, d = dep_case
+    case = validate_case(with_(particles__n=40, protocol__v_init=0.0, protocol__rain_speed=1.0,
+                               protocol__rain_time=15.0))
+    v = engines.deposit_deck_vars(case)
+    assert int(v["rain_steps"]) == 150_000 and int(v["min_steps"]) >= 150_000
+    assert float(v["drag"]) == pytest.approx(grain_mass(case) * 1.0 / 1.0)
+    write_initial(case, tmp_path / "init.data")
+    summary = engines.run("lammps", case, tmp_path / "init.data", tmp_path / "run", timeout=600)
+    assert summary["settled"]
+    screen = (tmp_path / "run" / "work" / "screen.txt").read_text()
+    assert "rodpack: rain drag off at step 150000" in screen
+    th = RunData(tmp_path / "run").thermo
+    bound = 0.5 * 40 * grain_mass(case) * 1.0**2
+    assert 0.1 * bound < th.ke.max() < bound
+    assert th.step.iloc[-1] >= 150_000
