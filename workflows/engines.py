@@ -737,7 +737,6 @@ def convert_glued_rods(native: Path, particles: Path, out_contacts: Path, out_pa
     one rod-rod contact (:func:`analysis.contacts.merge_glued_contacts`: summed force,
     force-weighted point, deepest overlap).
     """
-    from analysis.contacts import glued_bodies, merge_glued_contacts
     from analysis.frame import Contacts
     from analysis.io import read_particle_frames
 
@@ -757,19 +756,28 @@ def convert_glued_rods(native: Path, particles: Path, out_contacts: Path, out_pa
             dropped += int(np.count_nonzero(~keep))
             sph = Contacts(step, ids_i[keep].astype(np.int64), ids_j[keep].astype(np.int64),
                            point[keep], n[keep], delta[keep], (table[:, 3:6] + table[:, 6:9])[keep])
-            rods, _ = glued_bodies(fr, mol[step])
-            merged, _ = merge_glued_contacts(fr, sph, mol[step])
-            centre = np.where(rods.periodic,
-                              rods.box_lo + np.mod(rods.x - rods.box_lo, rods.box), rods.x)
-            io.write_particles_frame(fp, step, rods.box, rods.periodic, rods.ids, rods.types,
-                                     centre, rods.radius, axis=rods.axis, length=rods.length,
-                                     box_lo=rods.box_lo)
-            rec = np.column_stack([merged.point, merged.normal, merged.overlap, merged.force])
-            io.write_contacts_frame(fc, step, rods.box, rods.periodic,
-                                    np.column_stack([merged.i, merged.j]), rec, box_lo=rods.box_lo)
+            _write_glued_frame(fp, fc, fr, sph, mol[step])
     io.finalize(out_contacts)
     io.finalize(out_particles)
     return {"dropped": dropped}
+
+
+def _write_glued_frame(fp, fc, spheres, contacts, body):
+    """Write one frame of glued spheres as rods (:func:`analysis.contacts.glued_bodies`,
+    centres wrapped into a periodic box) and their sphere contacts merged per rod pair
+    (:func:`analysis.contacts.merge_glued_contacts`) to the open particle and contact
+    files; ``body`` (N,) is each sphere's rod id."""
+    from analysis.contacts import glued_bodies, merge_glued_contacts
+
+    rods, _ = glued_bodies(spheres, body)
+    merged, _ = merge_glued_contacts(spheres, contacts, body)
+    centre = np.where(rods.periodic, rods.box_lo + np.mod(rods.x - rods.box_lo, rods.box), rods.x)
+    io.write_particles_frame(fp, spheres.step, rods.box, rods.periodic, rods.ids, rods.types,
+                             centre, rods.radius, axis=rods.axis, length=rods.length,
+                             box_lo=rods.box_lo)
+    rec = np.column_stack([merged.point, merged.normal, merged.overlap, merged.force])
+    io.write_contacts_frame(fc, spheres.step, rods.box, rods.periodic,
+                            np.column_stack([merged.i, merged.j]), rec, box_lo=rods.box_lo)
 
 
 #: LIGGGHTS deposition walls as the deck names them (fix wall/gran ... store_force yes), in
@@ -817,7 +825,6 @@ def convert_multisphere_rods(native: Path, particles: Path, out_contacts: Path,
     (:func:`multisphere_wall_contacts`) merge per rod pair and per rod and wall
     (:func:`analysis.contacts.merge_glued_contacts`).
     """
-    from analysis.contacts import glued_bodies, merge_glued_contacts
     from analysis.frame import Contacts
     from analysis.io import read_particle_frames
 
@@ -846,14 +853,7 @@ def convert_multisphere_rods(native: Path, particles: Path, out_contacts: Path,
                            np.concatenate([n[keep], w.normal]),
                            np.concatenate([delta[keep], w.overlap]),
                            np.concatenate([table[keep, 9:12], w.force]))
-            rods, _ = glued_bodies(fr, body[step])
-            merged, _ = merge_glued_contacts(fr, sph, body[step])
-            io.write_particles_frame(fp, step, rods.box, rods.periodic, rods.ids, rods.types,
-                                     rods.x, rods.radius, axis=rods.axis, length=rods.length,
-                                     box_lo=rods.box_lo)
-            rec = np.column_stack([merged.point, merged.normal, merged.overlap, merged.force])
-            io.write_contacts_frame(fc, step, rods.box, rods.periodic,
-                                    np.column_stack([merged.i, merged.j]), rec, box_lo=rods.box_lo)
+            _write_glued_frame(fp, fc, fr, sph, body[step])
     io.finalize(out_contacts)
     io.finalize(out_particles)
     return {"dropped": dropped}
