@@ -186,9 +186,11 @@ def deposit_deck_vars(case: dict) -> dict[str, str]:
 
 
 # -- LIGGGHTS deposition: multisphere rods (inputs/liggghts/in.rods.deposit) ---------------------
-#: the smallest restitution coefficient passed to LIGGGHTS (its damping needs e > 0; pysim's
-#: law with a constant gamma_n stops rebounding altogether below some impact speed)
-E_MIN = 0.01
+#: the smallest restitution coefficient passed to LIGGGHTS: it refuses 0.05 and below
+#: ("0.05 < coefficientRestitution <= 1 required"), while pysim's law with a constant
+#: gamma_n stops rebounding altogether below some impact speed (rods of d = 2 in the quick
+#: deposition profile: e = 0 for a rod pair)
+E_MIN = 0.06
 #: how full LIGGGHTS' insertion may make the column its rods' centres can use (rod volume
 #: over that column's volume): fix insert/pack keeps a rod's bounding sphere (diameter
 #: L + D) inside the region, so the centres of rods of d = 5 in a box of width 8 D share a

@@ -60,6 +60,17 @@ def test_case_maps_to_the_deck():
     assert "bounding sphere" in engines.supports("liggghts", narrow)
 
 
+def test_restitution_passed_to_liggghts_stays_above_its_limit():
+    """LIGGGHTS refuses a restitution of 0.05 or less; rods of d = 2 with the quick
+    deposition profile's damping do not rebound at all under pysim's law (e = 0), so the
+    deck gets the floor."""
+    case = validate_case(with_(particles__aspect_ratio=1.0, particles__n=150,
+                               container__width=8.0))
+    v = engines.liggghts_deposit_vars(case)
+    assert float(v["e_n"]) == engines.E_MIN > 0.05
+    assert float(v["e_wall"]) > 0.05
+
+
 def test_restitution_of_pysims_law():
     """Undamped: elastic; the restitution falls with the damping and rises with the
     impact speed (pysim's constant gamma_n), and vanishes when the contact never opens."""
