@@ -314,7 +314,7 @@ def deposit_profiles(runs, out):
     each coarse-graining element and the horizontal, and the Janssen apparent mass
     (``sigma_vv W^(d-1) / g`` against the grain mass above each slab, the diagonal
     being a column whose walls hold nothing); one colour per variant, solid pysim,
-    dashed LAMMPS.
+    dashed LAMMPS, dotted LIGGGHTS.
 
     ``runs``: dicts with ``label``, ``engine``, ``index`` (colour), ``profile``
     (:func:`analysis.summary.analyse_deposit`), ``angles`` (degrees, final frame) and,
@@ -373,7 +373,8 @@ def deposit_profiles(runs, out):
     handles, labels = axes[0].get_legend_handles_labels()
     axes[7].axis("off")
     axes[7].legend(handles, labels, fontsize=7, loc="upper left")
-    fig.suptitle("deposits: profiles versus depth (solid pysim, dashed LAMMPS)", fontsize=9)
+    fig.suptitle("deposits: profiles versus depth (solid pysim, dashed LAMMPS, dotted LIGGGHTS)",
+                 fontsize=9)
     fig.tight_layout()
     _save(fig, out)
 
