@@ -159,7 +159,7 @@ def deposit_deck_vars(case: dict) -> dict[str, str]:
     stiffness (the deck converts it to LAMMPS' ``k_N = k_n / sqrt(R_eff)``), the cohesive
     force ``F_c = Bo_g m g`` per sphere pair within ``d_c``, and the settling test of
     :mod:`pysim.protocols.deposit` at every ``thermo.dat`` row."""
-    from pysim.protocols.deposit import cohesion, rain_drag
+    from pysim.protocols.deposit import cohesion, rain_drag, rain_steps
 
     c, pr = case["contact"], case["protocol"]
     out = case.get("output", {})
@@ -167,7 +167,7 @@ def deposit_deck_vars(case: dict) -> dict[str, str]:
     f_c, d_c = cohesion(case)
     every = out.get("thermo_every", 1000)
     dt = pr["dt"]
-    rain_steps = int(round(pr.get("rain_time", 0.0) / dt))
+    rain_end = rain_steps(pr)
     d = case["particles"]["diameter"]["mean"]
     v = {"width": case["container"]["width"], "k_n": c["k_n"], "gamma_n": gamma_n,
          "k_t": c.get("k_t", 0.0),
@@ -175,10 +175,10 @@ def deposit_deck_vars(case: dict) -> dict[str, str]:
          "mu": c.get("friction", 0.0), "mu_wall": c.get("wall_friction", c.get("friction", 0.0)),
          "f_coh": f_c, "d_coh": d_c, "g": case["gravity"], "dt": dt,
          "check_every": every, "thermo_every": every,
-         "min_steps": max(int(np.ceil(pr.get("min_time", 0.0) / dt)), rain_steps),
+         "min_steps": max(int(np.ceil(pr.get("min_time", 0.0) / dt)), rain_end),
          "max_steps": int(np.ceil(pr["max_time"] / dt)),
          "settle_ratio": pr.get("ke_ratio", 1e-6), "dump_every": out.get("dump_every", 4000),
-         "drag": rain_drag(case)[0], "rain_steps": rain_steps,
+         "drag": rain_drag(case)[0], "rain_steps": rain_end,
          "skin": 0.2 * d, **_rod_vars(case)}
     if case["particles"]["diameter"].get("distribution", "mono") != "mono":
         raise EngineError("the LAMMPS deposition deck needs equal spheres (mono diameters)")

@@ -72,6 +72,12 @@ def rain_drag(case: dict) -> tuple[float, float]:
     return gamma, gamma * length**2 / 12.0
 
 
+def rain_steps(protocol: dict) -> int:
+    """The step at which the rain drag is switched off: ``rain_time / dt`` rounded (0
+    without a rain)."""
+    return int(round(protocol.get("rain_time", 0.0) / protocol["dt"]))
+
+
 def simulation_from_case(case: dict, init: dict) -> Simulation:
     """The :class:`Simulation` of a deposition case: non-periodic box from the initial
     data file, gravity along the last axis, base and side walls (relative to the lower
@@ -131,7 +137,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     max_steps = int(math.ceil(pr["max_time"] / dt))
     min_steps = int(math.ceil(pr.get("min_time", 0.0) / dt))
     ratio = pr.get("ke_ratio", 1e-6)
-    rain_steps = int(round(pr.get("rain_time", 0.0) / dt))
+    rain_end = rain_steps(pr)
     drag = rain_drag(case)
     files = RunFiles(out_dir, init["ids"], origin=init["box_lo"])
     if resume:
@@ -142,7 +148,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
         drv = {"peak": 0.0}
     s = sim.state
     free = (sim.model.gamma_bg, sim.model.gamma_rot)  # the case's own drag, after the rain
-    sim.set_drag(*(drag if s.step < rain_steps else free))
+    sim.set_drag(*(drag if s.step < rain_end else free))
     t0 = time.perf_counter()
     last_ckpt = t0
     steps_at_start = s.step
@@ -159,11 +165,11 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
         while s.step < max_steps:
             nxt = min(max_steps, (s.step // thermo_every + 1) * thermo_every,
                       (s.step // dump_every + 1) * dump_every)
-            if s.step < rain_steps:
-                nxt = min(nxt, rain_steps)
+            if s.step < rain_end:
+                nxt = min(nxt, rain_end)
             before = s.step
             sim.run(nxt - s.step)
-            if s.step == rain_steps:
+            if s.step == rain_end:
                 sim.set_drag(*free)
             bar.update(s.step - before)
             if s.step % thermo_every == 0 or s.step == max_steps:
@@ -171,7 +177,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
                 drv["peak"] = max(drv["peak"], th.ke)
                 files.thermo((th.step, th.time, math.nan, math.nan, th.ke, th.pe, th.n_contacts))
                 bar.set_postfix(ke=f"{th.ke:.3g}", peak=f"{drv['peak']:.3g}", refresh=False)
-                settled = s.step >= max(min_steps, rain_steps) and th.ke < ratio * drv["peak"]
+                settled = s.step >= max(min_steps, rain_end) and th.ke < ratio * drv["peak"]
             if s.step % dump_every == 0 or settled or s.step == max_steps:
                 files.dump(sim)
             if settled:
