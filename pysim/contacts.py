@@ -21,6 +21,9 @@ loops call them:
   how rows are shared among threads, so 1 and 2 threads give the same bits. Listed rod
   pairs that the motion since the list build keeps out of reach are skipped
   (:func:`pysim.neighbors.motion_bound`; they would add nothing).
+  :func:`sphere_pass` replaces ``pair_pass`` when every particle is a sphere: the same
+  sums in the same order, with the contact laws of a chunk of pairs evaluated together
+  on SIMD lanes (gather, laws, scatter).
 * :func:`pair_forces`, a plain serial loop in pair order that can also record the
   contact table (used with each dump, and by the tests).
 
@@ -360,178 +363,341 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
     return 0.0, 0
 
 
-@pnjit
-def sphere_pass(x, v, omega, radius, box, periodic, pj, istart, hist, law, p, friction, dt, f,
-                torque, fj, stats, virial, scatter=False):
-    """:func:`pair_pass` for spheres only (every ``L = 0``), with the geometry and the
-    normal laws written out in the loop: the same equations and the same outputs, about
-    twice as fast. The normal passes through both centres, so normal forces exert no
-    torque; with friction the tangential force does, ``c x F_t`` on i and ``-e x F_t``
-    on j (``c``, ``e`` the contact point relative to the centres). The minimum image is
-    taken by comparison with half the box (positions are wrapped into the box).
-    ``scatter`` as in :func:`pair_pass`."""
-    n = x.shape[0]
-    kn, gn, kt, gt, mu = p[K_N], p[GAMMA_N], p[K_T], p[GAMMA_T], p[MU]
-    fcoh, dcoh = p[F_COH], p[D_COH]
-    b0, b1, b2 = box[0], box[1], box[2]
+#: listed pairs per chunk of :func:`sphere_pass`. Its scratch holds ``_NS`` rows of ``CAP``
+#: values; with a stride known at compile time the compiler can tell that the rows do not
+#: overlap, and runs :func:`_sphere_laws` on SIMD lanes (it gives up on runtime strides:
+#: too many arrays to check for overlap)
+CAP = 128
+# rows of the scratch: inputs (gap d, |d|^2, radii, velocities and spins of i and j, spring),
+# then outputs (force on i, torque on i, torque on j, overlap); the spring is updated in place
+_D, _DIST2, _RI, _RJ, _VI, _VJ, _WI, _WJ, _H = 0, 3, 4, 5, 6, 9, 12, 15, 18
+_F, _T, _U, _DELTA = 21, 24, 27, 30
+_NS = 31
+
+
+@njit
+def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, hist, dcoh,
+                   friction, scatter, fj, S, kk):
+    """Copy the listed pairs ``k0:k1`` within reach (``|d| < R_i + R_j + d_c``) into the
+    scratch ``S``, one column each in pair order, ``kk`` their pair indices; zero every
+    pair's spring and reaction (:func:`_sphere_scatter` writes those of the pairs in
+    reach). Without branches on the pair: every pair is copied to the next free column,
+    which only a pair in reach keeps. Returns the number of pairs in reach."""
     hb0, hb1, hb2 = 0.5 * b0, 0.5 * b1, 0.5 * b2
-    p0, p1, p2 = periodic[0], periodic[1], periodic[2]
-    nb = (n + BLOCK - 1) // BLOCK
-    blk = np.zeros((nb if stats else 0, _STATS))
+    m = 0
+    for k in range(k0, k1):
+        i = pi[k]
+        j = pj[k]
+        d0 = x[j, 0] - x[i, 0]
+        d1 = x[j, 1] - x[i, 1]
+        d2 = x[j, 2] - x[i, 2]
+        if p0:
+            if d0 > hb0:
+                d0 -= b0
+            elif d0 < -hb0:
+                d0 += b0
+        if p1:
+            if d1 > hb1:
+                d1 -= b1
+            elif d1 < -hb1:
+                d1 += b1
+        if p2:
+            if d2 > hb2:
+                d2 -= b2
+            elif d2 < -hb2:
+                d2 += b2
+        dist2 = d0 * d0 + d1 * d1 + d2 * d2
+        ri = radius[i]
+        rj = radius[j]
+        reach = ri + rj + dcoh
+        kk[m] = k
+        S[_D * CAP + m] = d0
+        S[(_D + 1) * CAP + m] = d1
+        S[(_D + 2) * CAP + m] = d2
+        S[_DIST2 * CAP + m] = dist2
+        S[_RI * CAP + m] = ri
+        S[_RJ * CAP + m] = rj
+        for c in range(3):
+            S[(_VI + c) * CAP + m] = v[i, c]
+            S[(_VJ + c) * CAP + m] = v[j, c]
+        if friction:
+            for c in range(3):
+                S[(_WI + c) * CAP + m] = omega[i, c]
+                S[(_WJ + c) * CAP + m] = omega[j, c]
+                S[(_H + c) * CAP + m] = hist[k, c]
+                hist[k, c] = 0.0  # the pairs in reach get theirs back from the laws
+        if not scatter:
+            for c in range(FJ_COLUMNS):
+                fj[k, c] = 0.0
+        m += dist2 < reach * reach
+    return m
+
+
+@njit
+def _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
+    """The contact laws (:func:`pair_force` for spheres) of the ``mc`` gathered pairs,
+    written with selects instead of branches on the pair so that the loop runs on SIMD
+    lanes: the same operations in the same order, so the same bits. Writes the force on
+    i, the torques on i and j, the new spring and the overlap into ``S``."""
+    cohesive = fcoh != 0.0
+    if not friction:
+        for m in range(mc):
+            d0 = S[_D * CAP + m]
+            d1 = S[(_D + 1) * CAP + m]
+            d2 = S[(_D + 2) * CAP + m]
+            rs = S[_RI * CAP + m] + S[_RJ * CAP + m]
+            dist = np.sqrt(S[_DIST2 * CAP + m])
+            inv = 1.0 / dist
+            n0 = d0 * inv
+            n1 = d1 * inv
+            n2 = d2 * inv
+            delta = rs - dist
+            dv0 = S[_VI * CAP + m] - S[_VJ * CAP + m]
+            dv1 = S[(_VI + 1) * CAP + m] - S[(_VJ + 1) * CAP + m]
+            dv2 = S[(_VI + 2) * CAP + m] - S[(_VJ + 2) * CAP + m]
+            vn = dv0 * n0 + dv1 * n1 + dv2 * n2
+            fn = normal_force(law, kn, gn, delta, vn, rs) if delta > 0.0 else 0.0
+            if cohesive:
+                fn += cohesion_force(fcoh, dcoh, delta)
+            S[_DELTA * CAP + m] = delta
+            S[_F * CAP + m] = -fn * n0
+            S[(_F + 1) * CAP + m] = -fn * n1
+            S[(_F + 2) * CAP + m] = -fn * n2
+        return
+    for m in range(mc):
+        d0 = S[_D * CAP + m]
+        d1 = S[(_D + 1) * CAP + m]
+        d2 = S[(_D + 2) * CAP + m]
+        ri = S[_RI * CAP + m]
+        rs = ri + S[_RJ * CAP + m]
+        vi0 = S[_VI * CAP + m]
+        vi1 = S[(_VI + 1) * CAP + m]
+        vi2 = S[(_VI + 2) * CAP + m]
+        vj0 = S[_VJ * CAP + m]
+        vj1 = S[(_VJ + 1) * CAP + m]
+        vj2 = S[(_VJ + 2) * CAP + m]
+        dist = np.sqrt(S[_DIST2 * CAP + m])
+        inv = 1.0 / dist
+        n0 = d0 * inv
+        n1 = d1 * inv
+        n2 = d2 * inv
+        delta = rs - dist
+        touch = delta > 0.0
+        vn = (vi0 - vj0) * n0 + (vi1 - vj1) * n1 + (vi2 - vj2) * n2
+        fn = normal_force(law, kn, gn, delta, vn, rs) if touch else 0.0
+        if cohesive:
+            fn += cohesion_force(fcoh, dcoh, delta)
+        F0 = -fn * n0
+        F1 = -fn * n1
+        F2 = -fn * n2
+        S[_DELTA * CAP + m] = delta
+        ar = ri - 0.5 * delta  # contact point c = ar n from x_i, e = c - d
+        er = ar - dist
+        c0 = ar * n0
+        c1 = ar * n1
+        c2 = ar * n2
+        e0 = er * n0
+        e1 = er * n1
+        e2 = er * n2
+        wi0 = S[_WI * CAP + m]
+        wi1 = S[(_WI + 1) * CAP + m]
+        wi2 = S[(_WI + 2) * CAP + m]
+        wj0 = S[_WJ * CAP + m]
+        wj1 = S[(_WJ + 1) * CAP + m]
+        wj2 = S[(_WJ + 2) * CAP + m]
+        vr0 = vi0 + (wi1 * c2 - wi2 * c1) - vj0 - (wj1 * e2 - wj2 * e1)
+        vr1 = vi1 + (wi2 * c0 - wi0 * c2) - vj1 - (wj2 * e0 - wj0 * e2)
+        vr2 = vi2 + (wi0 * c1 - wi1 * c0) - vj2 - (wj0 * e1 - wj1 * e0)
+        vt = vr0 * n0 + vr1 * n1 + vr2 * n2
+        t0 = vr0 - vt * n0
+        t1 = vr1 - vt * n1
+        t2 = vr2 - vt * n2
+        f0, f1, f2, x0, x1, x2 = tangential_force(
+            kt, gt, mu, fn, S[_H * CAP + m], S[(_H + 1) * CAP + m], S[(_H + 2) * CAP + m], n0,
+            n1, n2, t0, t1, t2, dt)
+        # out of contact (a cohesive gap): no tangential force, the spring restarts
+        f0 = f0 if touch else 0.0
+        f1 = f1 if touch else 0.0
+        f2 = f2 if touch else 0.0
+        S[_H * CAP + m] = x0 if touch else 0.0
+        S[(_H + 1) * CAP + m] = x1 if touch else 0.0
+        S[(_H + 2) * CAP + m] = x2 if touch else 0.0
+        S[_F * CAP + m] = F0 + f0
+        S[(_F + 1) * CAP + m] = F1 + f1
+        S[(_F + 2) * CAP + m] = F2 + f2
+        S[_T * CAP + m] = c1 * f2 - c2 * f1
+        S[(_T + 1) * CAP + m] = c2 * f0 - c0 * f2
+        S[(_T + 2) * CAP + m] = c0 * f1 - c1 * f0
+        S[_U * CAP + m] = -(e1 * f2 - e2 * f1)
+        S[(_U + 1) * CAP + m] = -(e2 * f0 - e0 * f2)
+        S[(_U + 2) * CAP + m] = -(e0 * f1 - e1 * f0)
+
+
+@njit
+def _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter):
+    """Row ``i`` is complete: ``f_i = row sum + reaction sum`` (scatter) or the row sum."""
     if scatter:
-        _zero(f, torque)
-    for b in prange(nb):
-        for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
-            xi0, xi1, xi2 = x[i, 0], x[i, 1], x[i, 2]
-            vi0, vi1, vi2 = v[i, 0], v[i, 1], v[i, 2]
-            ri = radius[i]
+        f[i, 0] = s0 + f[i, 0]
+        f[i, 1] = s1 + f[i, 1]
+        f[i, 2] = s2 + f[i, 2]
+        torque[i, 0] = q0 + torque[i, 0]
+        torque[i, 1] = q1 + torque[i, 1]
+        torque[i, 2] = q2 + torque[i, 2]
+    else:
+        f[i, 0] = s0
+        f[i, 1] = s1
+        f[i, 2] = s2
+        torque[i, 0] = q0
+        torque[i, 1] = q1
+        torque[i, 2] = q2
+
+
+@njit
+def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, fj, stats,
+                    blk, b, S, kk, mc, scatter, s0, s1, s2, q0, q1, q2):
+    """Add the forces of the ``mc`` pairs in reach of the chunk ``k0:k1`` in pair order, as
+    :func:`pair_pass` does, and store their springs. ``i`` is the row of pair ``k0``, ``s``
+    and ``q`` its partial force and torque sums; rows (of block ``b``, up to ``hi``) that
+    end within the chunk are completed (:func:`_finish_row`). Adds the block's energy,
+    contacts and virial to ``blk[b]``. Returns the row and partial sums after the chunk."""
+    for m in range(mc):
+        k = kk[m]
+        while istart[i + 1] <= k:
+            _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter)
             s0 = 0.0
             s1 = 0.0
             s2 = 0.0
             q0 = 0.0
             q1 = 0.0
             q2 = 0.0
-            for k in range(istart[i], istart[i + 1]):
-                j = pj[k]
-                d0 = x[j, 0] - xi0
-                d1 = x[j, 1] - xi1
-                d2 = x[j, 2] - xi2
-                if p0:
-                    if d0 > hb0:
-                        d0 -= b0
-                    elif d0 < -hb0:
-                        d0 += b0
-                if p1:
-                    if d1 > hb1:
-                        d1 -= b1
-                    elif d1 < -hb1:
-                        d1 += b1
-                if p2:
-                    if d2 > hb2:
-                        d2 -= b2
-                    elif d2 < -hb2:
-                        d2 += b2
-                dist2 = d0 * d0 + d1 * d1 + d2 * d2
-                rj = radius[j]
-                rs = ri + rj
-                reach = rs + dcoh
-                if dist2 >= reach * reach:
-                    if friction:
-                        hist[k, 0] = 0.0
-                        hist[k, 1] = 0.0
-                        hist[k, 2] = 0.0
-                    if not scatter:
-                        for c in range(FJ_COLUMNS):
-                            fj[k, c] = 0.0
-                    continue
-                dist = np.sqrt(dist2)
-                inv = 1.0 / dist
-                n0 = d0 * inv
-                n1 = d1 * inv
-                n2 = d2 * inv
-                delta = rs - dist
-                vn = (vi0 - v[j, 0]) * n0 + (vi1 - v[j, 1]) * n1 + (vi2 - v[j, 2]) * n2
-                fn = 0.0
-                if delta > 0.0:
-                    if law == HOOKE:
-                        fn = kn * delta + gn * vn
-                    elif law == HERTZ:
-                        fn = kn * delta * np.sqrt(delta) + gn * vn
-                    else:
-                        fn = kn * delta / (rs * rs) + gn * vn
-                if fcoh != 0.0:
-                    fn += cohesion_force(fcoh, dcoh, delta)
-                F0 = -fn * n0
-                F1 = -fn * n1
-                F2 = -fn * n2
-                t0 = 0.0
-                t1 = 0.0
-                t2 = 0.0
-                u0 = 0.0
-                u1 = 0.0
-                u2 = 0.0
-                if friction:
-                    ar = ri - 0.5 * delta  # contact point c = ar n from x_i, e = c - d
-                    er = ar - dist
-                    c0 = ar * n0
-                    c1 = ar * n1
-                    c2 = ar * n2
-                    e0 = er * n0
-                    e1 = er * n1
-                    e2 = er * n2
-                    wi0, wi1, wi2 = omega[i, 0], omega[i, 1], omega[i, 2]
-                    wj0, wj1, wj2 = omega[j, 0], omega[j, 1], omega[j, 2]
-                    vr0 = vi0 + (wi1 * c2 - wi2 * c1) - v[j, 0] - (wj1 * e2 - wj2 * e1)
-                    vr1 = vi1 + (wi2 * c0 - wi0 * c2) - v[j, 1] - (wj2 * e0 - wj0 * e2)
-                    vr2 = vi2 + (wi0 * c1 - wi1 * c0) - v[j, 2] - (wj0 * e1 - wj1 * e0)
-                    vt = vr0 * n0 + vr1 * n1 + vr2 * n2
-                    if delta > 0.0:
-                        ft0, ft1, ft2, h0, h1, h2 = tangential_force(
-                            kt, gt, mu, fn, hist[k, 0], hist[k, 1], hist[k, 2], n0, n1, n2,
-                            vr0 - vt * n0, vr1 - vt * n1, vr2 - vt * n2, dt)
-                        hist[k, 0] = h0
-                        hist[k, 1] = h1
-                        hist[k, 2] = h2
-                        F0 += ft0
-                        F1 += ft1
-                        F2 += ft2
-                        t0 = c1 * ft2 - c2 * ft1
-                        t1 = c2 * ft0 - c0 * ft2
-                        t2 = c0 * ft1 - c1 * ft0
-                        u0 = -(e1 * ft2 - e2 * ft1)
-                        u1 = -(e2 * ft0 - e0 * ft2)
-                        u2 = -(e0 * ft1 - e1 * ft0)
-                    else:
-                        hist[k, 0] = 0.0
-                        hist[k, 1] = 0.0
-                        hist[k, 2] = 0.0
-                s0 += F0
-                s1 += F1
-                s2 += F2
-                q0 += t0
-                q1 += t1
-                q2 += t2
-                if scatter:
-                    f[j, 0] -= F0
-                    f[j, 1] -= F1
-                    f[j, 2] -= F2
-                    torque[j, 0] += u0
-                    torque[j, 1] += u1
-                    torque[j, 2] += u2
-                else:
-                    fj[k, 0] = -F0
-                    fj[k, 1] = -F1
-                    fj[k, 2] = -F2
-                    fj[k, 3] = u0
-                    fj[k, 4] = u1
-                    fj[k, 5] = u2
-                if stats:
-                    if delta > 0.0:
-                        blk[b, 0] += elastic_energy(law, kn, delta, rs)
-                    blk[b, 1] += 1.0
-                    blk[b, 2] += d0 * F0
-                    blk[b, 3] += d0 * F1
-                    blk[b, 4] += d0 * F2
-                    blk[b, 5] += d1 * F0
-                    blk[b, 6] += d1 * F1
-                    blk[b, 7] += d1 * F2
-                    blk[b, 8] += d2 * F0
-                    blk[b, 9] += d2 * F1
-                    blk[b, 10] += d2 * F2
-            if scatter:  # the reactions on i are complete: row sum + reaction sum
-                f[i, 0] = s0 + f[i, 0]
-                f[i, 1] = s1 + f[i, 1]
-                f[i, 2] = s2 + f[i, 2]
-                torque[i, 0] = q0 + torque[i, 0]
-                torque[i, 1] = q1 + torque[i, 1]
-                torque[i, 2] = q2 + torque[i, 2]
-            else:
-                f[i, 0] = s0
-                f[i, 1] = s1
-                f[i, 2] = s2
-                torque[i, 0] = q0
-                torque[i, 1] = q1
-                torque[i, 2] = q2
+            i += 1
+        F0 = S[_F * CAP + m]
+        F1 = S[(_F + 1) * CAP + m]
+        F2 = S[(_F + 2) * CAP + m]
+        t0 = 0.0
+        t1 = 0.0
+        t2 = 0.0
+        u0 = 0.0
+        u1 = 0.0
+        u2 = 0.0
+        if friction:
+            t0 = S[_T * CAP + m]
+            t1 = S[(_T + 1) * CAP + m]
+            t2 = S[(_T + 2) * CAP + m]
+            u0 = S[_U * CAP + m]
+            u1 = S[(_U + 1) * CAP + m]
+            u2 = S[(_U + 2) * CAP + m]
+            hist[k, 0] = S[_H * CAP + m]
+            hist[k, 1] = S[(_H + 1) * CAP + m]
+            hist[k, 2] = S[(_H + 2) * CAP + m]
+        s0 += F0
+        s1 += F1
+        s2 += F2
+        q0 += t0
+        q1 += t1
+        q2 += t2
+        if scatter:
+            j = pj[k]
+            f[j, 0] -= F0
+            f[j, 1] -= F1
+            f[j, 2] -= F2
+            torque[j, 0] += u0
+            torque[j, 1] += u1
+            torque[j, 2] += u2
+        else:
+            fj[k, 0] = -F0
+            fj[k, 1] = -F1
+            fj[k, 2] = -F2
+            fj[k, 3] = u0
+            fj[k, 4] = u1
+            fj[k, 5] = u2
+        if stats:
+            delta = S[_DELTA * CAP + m]
+            if delta > 0.0:
+                rs = S[_RI * CAP + m] + S[_RJ * CAP + m]
+                blk[b, 0] += elastic_energy(law, kn, delta, rs)
+            blk[b, 1] += 1.0
+            d0 = S[_D * CAP + m]
+            d1 = S[(_D + 1) * CAP + m]
+            d2 = S[(_D + 2) * CAP + m]
+            blk[b, 2] += d0 * F0
+            blk[b, 3] += d0 * F1
+            blk[b, 4] += d0 * F2
+            blk[b, 5] += d1 * F0
+            blk[b, 6] += d1 * F1
+            blk[b, 7] += d1 * F2
+            blk[b, 8] += d2 * F0
+            blk[b, 9] += d2 * F1
+            blk[b, 10] += d2 * F2
+    while i < hi and istart[i + 1] <= k1:
+        _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter)
+        s0 = 0.0
+        s1 = 0.0
+        s2 = 0.0
+        q0 = 0.0
+        q1 = 0.0
+        q2 = 0.0
+        i += 1
+    return i, s0, s1, s2, q0, q1, q2
+
+
+#: blocks of rows per scratch allocation when threaded (one allocation in all on one thread)
+_CHUNK = 8
+
+
+@pnjit
+def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, hist, law, p, friction, dt,
+                f, torque, fj, stats, virial, scatter=False):
+    """:func:`pair_pass` for spheres only (every ``L = 0``): the same equations and the
+    same outputs, several times faster. The normal passes through both centres, so
+    normal forces exert no torque; with friction the tangential force does, ``c x F_t``
+    on i and ``-e x F_t`` on j (``c``, ``e`` the contact point relative to the centres).
+    The minimum image is taken by comparison with half the box (positions are wrapped
+    into the box). ``pi`` the first member of each pair; ``scatter`` as in
+    :func:`pair_pass`.
+
+    Each block of rows runs in chunks of at most ``CAP`` listed pairs, in three loops:
+    :func:`_sphere_gather` copies the pairs in reach into a scratch, one column each,
+    :func:`_sphere_laws` evaluates their laws on SIMD lanes, and :func:`_sphere_scatter`
+    adds the forces in pair order. The row sums carry over from chunk to chunk, so the
+    sums, and the bits, do not depend on the chunks."""
+    n = x.shape[0]
+    kn, gn, kt, gt, mu = p[K_N], p[GAMMA_N], p[K_T], p[GAMMA_T], p[MU]
+    fcoh, dcoh = p[F_COH], p[D_COH]
+    b0, b1, b2 = box[0], box[1], box[2]
+    p0, p1, p2 = periodic[0], periodic[1], periodic[2]
+    nb = (n + BLOCK - 1) // BLOCK
+    blk = np.zeros((nb if stats else 0, _STATS))
+    if scatter:
+        _zero(f, torque)
+    nc = 1 if scatter else (nb + _CHUNK - 1) // _CHUNK
+    for c in prange(nc):
+        S = np.empty(_NS * CAP)
+        kk = np.empty(CAP, np.int64)
+        b_end = nb if scatter else min(nb, (c + 1) * _CHUNK)
+        for b in range(0 if scatter else c * _CHUNK, b_end):
+            lo = b * BLOCK
+            hi = min(n, lo + BLOCK)
+            i = lo
+            s0 = 0.0
+            s1 = 0.0
+            s2 = 0.0
+            q0 = 0.0
+            q1 = 0.0
+            q2 = 0.0
+            k0 = istart[lo]
+            k_end = istart[hi]
+            while True:
+                k1 = min(k_end, k0 + CAP)
+                mc = _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1,
+                                    p2, hist, dcoh, friction, scatter, fj, S, kk)
+                _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt)
+                i, s0, s1, s2, q0, q1, q2 = _sphere_scatter(
+                    k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, fj, stats,
+                    blk, b, S, kk, mc, scatter, s0, s1, s2, q0, q1, q2)
+                k0 = k1
+                if k0 >= k_end:
+                    break
     if stats:
         return block_totals(blk, virial)
     return 0.0, 0

@@ -90,6 +90,10 @@ def tangential_force(kt, gt, mu, fn, x0, x1, x2, n0, n1, n2, vt0, vt1, vt2, dt):
     ``F_t = -k_t xi_t - gamma_t v_t``; if ``|F_t| > mu |f_n|`` the force is rescaled to
     ``mu |f_n|`` and the spring with it (``xi_t = -(F_t + gamma_t v_t)/k_t``).
     Returns ``(F_t (3), new xi_t (3))`` (``F_t`` the force on i).
+
+    Written with selects, not branches, so that a loop over contacts that calls it can
+    run on SIMD lanes (:func:`pysim.contacts.sphere_pass`); the values not selected may
+    be inf or NaN and are discarded.
     """
     # rotate into the tangent plane, preserving the length
     xn = x0 * n0 + x1 * n1 + x2 * n2
@@ -98,11 +102,11 @@ def tangential_force(kt, gt, mu, fn, x0, x1, x2, n0, n1, n2, vt0, vt1, vt2, dt):
     x1 -= xn * n1
     x2 -= xn * n2
     new = x0 * x0 + x1 * x1 + x2 * x2
-    if new > 0.0 and old > 0.0:
-        sc = np.sqrt(old / new)
-        x0 *= sc
-        x1 *= sc
-        x2 *= sc
+    keep = (new > 0.0) & (old > 0.0)
+    sc = np.sqrt(old / new)
+    x0 = x0 * sc if keep else x0
+    x1 = x1 * sc if keep else x1
+    x2 = x2 * sc if keep else x2
     x0 += vt0 * dt
     x1 += vt1 * dt
     x2 += vt2 * dt
@@ -111,14 +115,17 @@ def tangential_force(kt, gt, mu, fn, x0, x1, x2, n0, n1, n2, vt0, vt1, vt2, dt):
     f2 = -kt * x2 - gt * vt2
     fmag = np.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
     cap = mu * abs(fn)
-    if fmag > cap:
-        if fmag > 0.0:
-            sc = cap / fmag
-            f0 *= sc
-            f1 *= sc
-            f2 *= sc
-        if kt > 0.0:
-            x0 = -(f0 + gt * vt0) / kt
-            x1 = -(f1 + gt * vt1) / kt
-            x2 = -(f2 + gt * vt2) / kt
+    slip = fmag > cap
+    sc = cap / fmag
+    scale = slip & (fmag > 0.0)
+    f0 = f0 * sc if scale else f0
+    f1 = f1 * sc if scale else f1
+    f2 = f2 * sc if scale else f2
+    reset = slip & (kt > 0.0)
+    y0 = -(f0 + gt * vt0) / kt
+    y1 = -(f1 + gt * vt1) / kt
+    y2 = -(f2 + gt * vt2) / kt
+    x0 = y0 if reset else x0
+    x1 = y1 if reset else x1
+    x2 = y2 if reset else x2
     return f0, f1, f2, x0, x1, x2

@@ -148,7 +148,7 @@ def _body(f, torque, v, omega, mass, gx, gy, gz, gb, gr):
 
 
 @njit
-def forces(x, v, omega, u, radius, half, mass, box, periodic, pj, istart, jstart, jk, hist,
+def forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, jstart, jk, hist,
            fj, law, cp, friction, planes, cyls, wp, wfriction, whist, wall_force, sys, t, dt,
            f, torque, virial, stats):
     """Overwrite ``f``, ``torque`` with pair contacts, walls, gravity ``m g``, drag
@@ -163,7 +163,7 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pj, istart, jstart
                            cp, friction, dt, True, f, torque, fj, stats, virial, sys[SEP_SIGMA],
                            sys[SEP_SHRINK], scatter)
     else:
-        pe, nc = sphere_pass(x, v, omega, radius, box, periodic, pj, istart, hist, law, cp,
+        pe, nc = sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, hist, law, cp,
                              friction, dt, f, torque, fj, stats, virial, scatter)
     gx, gy, gz = sys[GX], sys[GY], sys[GZ]
     gb = sys[GAMMA_BG]
@@ -368,7 +368,7 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
             u_ref, box_ref)
         if rebuilt:
             rebuilds += 1
-        pe, nc, nw = forces(x, v, omega, u, radius, half, mass, box, periodic, pj, istart,
+        pe, nc, nw = forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart,
                             jstart, jk, hist, fj, law, cp, friction, planes, cyls, wp, wfriction,
                             whist, wall_force, sys, t, dt, f, torque, virial, k == nsteps - 1)
         for kk in range(3):
@@ -440,7 +440,7 @@ def heun_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
             u_ref, box_ref)
         if rebuilt:
             rebuilds += 1
-        forces(x, v, omega, u, radius, half, mass, box, periodic, pj, istart, jstart, jk, hist,
+        forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, jstart, jk, hist,
                fj, law, cp, False, planes, cyls, wp, False, whist, wall_force, sys, t + dt, dt, f,
                torque, virial, False)
         # corrector: x = scale x0 + dt/2 (scale F0 + F1)/(k_d a)
@@ -465,8 +465,8 @@ def heun_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
             u_ref, box_ref)
         if rebuilt:
             rebuilds += 1
-        pe, nc, _ = forces(x, v, omega, u, radius, half, mass, box, periodic, pj, istart, jstart,
-                           jk, hist, fj, law, cp, False, planes, cyls, wp, False, whist,
+        pe, nc, _ = forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart,
+                           jstart, jk, hist, fj, law, cp, False, planes, cyls, wp, False, whist,
                            wall_force, sys, t, dt, f, torque, virial, kk == nsteps - 1)
     return pi, pj, istart, jstart, jk, hist, fj, pe, nc, rebuilds
 
@@ -557,7 +557,7 @@ def fire_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
         pi, pj, istart, jstart, jk, hist, fj, _ = maybe_rebuild(
             x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,
             u_ref, box_ref)
-        pe, nc, _ = forces(x, v, omega, u, radius, half, mass, box, periodic, pj, istart, jstart,
-                           jk, hist, fj, law, cp, False, planes, cyls, wp, False, whist,
+        pe, nc, _ = forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart,
+                           jstart, jk, hist, fj, law, cp, False, planes, cyls, wp, False, whist,
                            wall_force, sys, 0.0, dt, f, torque, virial, True)
     return pi, pj, istart, jstart, jk, hist, fj, pe, nc, it, fmax, tmax

@@ -260,7 +260,7 @@ class Simulation:
         self._sync_threads()
         self._pe, self._nc, self._nw = itg.forces(
             s.x, s.v, s.omega, s.u, s.radius, self.half, s.mass, s.box, s.periodic,
-            *self._pairs()[1:], self.model.law_id, self._cp, self.model.friction, self.planes,
+            *self._pairs(), self.model.law_id, self._cp, self.model.friction, self.planes,
             self.cyls, self._wp, self._wfriction, self.whist, self.wall_force, self.sys, s.time,
             self.dt, self.f, self.torque, self.virial, True)
 

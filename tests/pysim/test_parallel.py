@@ -181,12 +181,16 @@ def test_short_trajectory_against_numpy_velocity_verlet():
     np.testing.assert_allclose(st.v, vr, rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.parametrize("scatter", [False, True])
+@pytest.mark.parametrize("law", ["hooke", "hertz_cohesive"])
 @pytest.mark.parametrize("friction", [False, True])
-def test_sphere_pass_equals_the_general_pass(rng, friction):
-    """The spheres-only loop gives the general loop's forces, torques, reactions and
-    springs (to rounding: it drops the exactly-zero torque of the normal force)."""
-    from pysim.contacts import pair_pass, sphere_pass
-    from pysim.forces import HOOKE, contact_params
+def test_sphere_pass_equals_the_general_pass(rng, friction, law, scatter):
+    """The spheres-only loop (gather, SIMD laws, scatter, in chunks of listed pairs) gives
+    the general loop's forces, torques, reactions, springs, energy and virial, with the
+    reactions stored per pair or added at once, for the linear law and for Hertz with
+    cohesion (pairs in a cohesive gap); rows and blocks span several chunks."""
+    from pysim.contacts import BLOCK, CAP, pair_pass, sphere_pass
+    from pysim.forces import HERTZ, HOOKE, contact_params
     from pysim.neighbors import build_list
 
     n = 300
@@ -199,26 +203,73 @@ def test_sphere_pass_equals_the_general_pass(rng, friction):
     half = np.zeros(n)
     per = np.ones(3, bool)
     pi, pj, istart, jstart, jk = build_list(x, u, r, half, box, per, 0.3)
-    p = contact_params(1e4, 5.0, k_t=5e3, gamma_t=1.0, mu=0.5 if friction else 0.0)
+    assert istart[BLOCK] > CAP  # the first block runs in more than one chunk
+    mu = 0.5 if friction else 0.0
+    if law == "hooke":
+        law_id, p = HOOKE, contact_params(1e4, 5.0, k_t=5e3, gamma_t=1.0, mu=mu)
+    else:
+        law_id, p = HERTZ, contact_params(1e5, 5.0, k_t=5e3, gamma_t=1.0, mu=mu, f_coh=3.0,
+                                          d_coh=0.05)
     out = []
     for kernel in ("general", "spheres"):
         hist = np.tile([1e-4, -2e-4, 3e-4], (len(pj), 1)) if friction else np.zeros((len(pj), 0))
         f = np.zeros((n, 3))
         tq = np.zeros((n, 3))
-        fj = np.zeros((len(pj), 6))
+        fj = np.ones((len(pj), 6))
         vir = np.zeros((3, 3))
         if kernel == "general":
-            pe, nc = pair_pass(x, v, w, u, r, half, box, per, pj, istart, hist, HOOKE, p,
-                               friction, 1e-4, False, f, tq, fj, True, vir)
+            pe, nc = pair_pass(x, v, w, u, r, half, box, per, pj, istart, hist, law_id, p,
+                               friction, 1e-4, False, f, tq, fj, True, vir, 0.0, 0.0, scatter)
         else:
-            pe, nc = sphere_pass(x, v, w, r, box, per, pj, istart, hist, HOOKE, p, friction,
-                                 1e-4, f, tq, fj, True, vir)
-        out.append((f, tq, fj, vir, hist, pe, nc))
+            pe, nc = sphere_pass(x, v, w, r, box, per, pi, pj, istart, hist, law_id, p,
+                                 friction, 1e-4, f, tq, fj, True, vir, scatter)
+        out.append((f, tq, vir, hist, fj, pe, nc))
     (a, b) = out
     assert a[6] == b[6] > 100
-    for k in range(5):
-        np.testing.assert_allclose(a[k], b[k], rtol=1e-12, atol=1e-12)
+    # the general loop's normal forces leave rounding torques, of the forces' rounding
+    atol = 1e-14 * max(1.0, np.abs(a[0]).max())
+    for k in range(5 if not scatter else 4):  # scatter: fj is neither read nor written
+        np.testing.assert_allclose(a[k], b[k], rtol=1e-12, atol=atol)
     assert a[5] == pytest.approx(b[5], rel=1e-14)
+    if law != "hooke":  # some pairs attract across a gap, without a tangential force
+        g = np.linalg.norm(x[pj] - x[pi] - box * np.round((x[pj] - x[pi]) / box), axis=1)
+        gap = (g > r[pi] + r[pj]) & (g < r[pi] + r[pj] + 0.05)
+        assert gap.sum() > 3
+        if friction:
+            assert np.all(b[3][gap] == 0.0)
+
+
+def test_sphere_pass_is_the_same_bits_on_one_and_two_threads(rng):
+    """Chunks and threads do not change the sums: the sphere pass with reactions stored
+    per pair and gathered (threads) equals, bit for bit, the one-thread pass that adds
+    each reaction at once."""
+    from pysim.contacts import reduce_pass, sphere_pass
+    from pysim.forces import HOOKE, contact_params
+    from pysim.neighbors import build_list
+
+    n = 500
+    box = np.full(3, 8.0)
+    x = rng.uniform(0, 8.0, (n, 3))
+    r = rng.uniform(0.4, 0.6, n)
+    v = rng.normal(0, 1, (n, 3))
+    w = rng.normal(0, 1, (n, 3))
+    pi, pj, istart, jstart, jk = build_list(x, np.tile([0.0, 0.0, 1.0], (n, 1)), r,
+                                            np.zeros(n), box, np.ones(3, bool), 0.3)
+    p = contact_params(1e4, 5.0, k_t=5e3, gamma_t=1.0, mu=0.5)
+    res = []
+    for scatter in (False, True):
+        hist = np.tile([1e-4, -2e-4, 3e-4], (len(pj), 1))
+        f = np.zeros((n, 3))
+        tq = np.zeros((n, 3))
+        fj = np.zeros((len(pj), 6))
+        vir = np.zeros((3, 3))
+        pe, nc = sphere_pass(x, v, w, r, box, np.ones(3, bool), pi, pj, istart, hist, HOOKE, p,
+                             True, 1e-4, f, tq, fj, True, vir, scatter)
+        reduce_pass(f, tq, jstart, jk, fj, v, w, np.ones(n), 0.0, 0.0, 0.0, 0.0, 0.0, False,
+                    scatter)
+        res.append((f, tq, hist, vir, pe, nc))
+    for a, b in zip(*res):
+        assert np.array_equal(a, b)
 
 
 def test_pairs_skipped_by_the_motion_bound_change_nothing(rng):
