@@ -386,8 +386,8 @@ def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, 
     hb0, hb1, hb2 = 0.5 * b0, 0.5 * b1, 0.5 * b2
     m = 0
     for k in range(k0, k1):
-        i = pi[k]
-        j = pj[k]
+        i = np.uint64(pi[k])  # unsigned: no negative-index wraparound
+        j = np.uint64(pj[k])
         d0 = x[j, 0] - x[i, 0]
         d1 = x[j, 1] - x[i, 1]
         d2 = x[j, 2] - x[i, 2]
@@ -597,7 +597,7 @@ def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torqu
         q1 += t1
         q2 += t2
         if scatter:
-            j = pj[k]
+            j = np.uint64(pj[k])
             f[j, 0] -= F0
             f[j, 1] -= F1
             f[j, 2] -= F2
