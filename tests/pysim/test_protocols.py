@@ -95,8 +95,28 @@ def test_jammed_disks_by_box_bisection(tmp_path):
         "output": {"thermo_every": 500, "dump_every": 100000}, "seed": 5})
     res = json.loads((out / "jammed.json").read_text())
     assert res["converged"] and 5e-16 <= res["energy_density"] <= 2e-15
+    assert res["fire_balanced"]
     assert 0.80 < res["phi_j"] < 0.87
     assert res["force_residual_max"] < 1e-3  # disks: true force balance
     f, c = RunData(out).frames()[-1]
     cn = ContactNumber().compute(f, c)
     assert 3.6 < cn.z_rattler_free < 4.4  # isostatic 2 d = 4, up to finite-size terms
+
+
+def test_jammed_reports_unbalanced_forces_as_not_converged(tmp_path):
+    """With far too few FIRE iterations per relaxation the forces never balance: the run
+    says so (``fire_balanced`` false) and does not call the state converged, whatever
+    its energy."""
+    import json
+
+    out = run_case(tmp_path, {
+        "particles": {"n": 64, "dimension": 2,
+                      "diameter": {"distribution": "bidisperse", "mean": 1.0, "ratio": 1.4}},
+        "contact": {"law": "harmonic", "k_n": 1.0},
+        "protocol": {"name": "jammed", "phi_init": 0.4, "rate": 2e-3, "dt": 0.01,
+                     "max_relax": 100, "max_bisections": 8},
+        "output": {"thermo_every": 500, "dump_every": 100000}, "seed": 5})
+    res = json.loads((out / "jammed.json").read_text())
+    assert not res["fire_balanced"]
+    assert not res["converged"]
+    assert res["force_residual_max"] > 1e-3
