@@ -186,6 +186,26 @@ def block_totals(blk, virial):
     return tot[0], int(tot[1])
 
 
+@njit
+def _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter):
+    """Row ``i`` is complete: ``f_i = row sum + reaction sum`` with ``scatter`` (the
+    reactions on ``i`` were added as its pairs with lower rows ran), else the row sum."""
+    if scatter:
+        f[i, 0] = s0 + f[i, 0]
+        f[i, 1] = s1 + f[i, 1]
+        f[i, 2] = s2 + f[i, 2]
+        torque[i, 0] = q0 + torque[i, 0]
+        torque[i, 1] = q1 + torque[i, 1]
+        torque[i, 2] = q2 + torque[i, 2]
+    else:
+        f[i, 0] = s0
+        f[i, 1] = s1
+        f[i, 2] = s2
+        torque[i, 0] = q0
+        torque[i, 1] = q1
+        torque[i, 2] = q2
+
+
 @pnjit
 def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law, p,
               friction, dt, rods, f, torque, fj, stats, virial, sep_sigma=0.0, sep_shrink=0.0,
@@ -344,20 +364,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
                     blk[b, 8] += d2 * F0
                     blk[b, 9] += d2 * F1
                     blk[b, 10] += d2 * F2
-            if scatter:  # the reactions on i are complete: row sum + reaction sum
-                f[i, 0] = s0 + f[i, 0]
-                f[i, 1] = s1 + f[i, 1]
-                f[i, 2] = s2 + f[i, 2]
-                torque[i, 0] = q0 + torque[i, 0]
-                torque[i, 1] = q1 + torque[i, 1]
-                torque[i, 2] = q2 + torque[i, 2]
-            else:
-                f[i, 0] = s0
-                f[i, 1] = s1
-                f[i, 2] = s2
-                torque[i, 0] = q0
-                torque[i, 1] = q1
-                torque[i, 2] = q2
+            _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter)
     if stats:
         return block_totals(blk, virial)
     return 0.0, 0
@@ -534,25 +541,6 @@ def _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
 
 
 @njit
-def _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter):
-    """Row ``i`` is complete: ``f_i = row sum + reaction sum`` (scatter) or the row sum."""
-    if scatter:
-        f[i, 0] = s0 + f[i, 0]
-        f[i, 1] = s1 + f[i, 1]
-        f[i, 2] = s2 + f[i, 2]
-        torque[i, 0] = q0 + torque[i, 0]
-        torque[i, 1] = q1 + torque[i, 1]
-        torque[i, 2] = q2 + torque[i, 2]
-    else:
-        f[i, 0] = s0
-        f[i, 1] = s1
-        f[i, 2] = s2
-        torque[i, 0] = q0
-        torque[i, 1] = q1
-        torque[i, 2] = q2
-
-
-@njit
 def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, fj, stats,
                     blk, b, S, kk, mc, scatter, s0, s1, s2, q0, q1, q2):
     """Add the forces of the ``mc`` pairs in reach of the chunk ``k0:k1`` in pair order, as
@@ -629,7 +617,7 @@ def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torqu
             blk[b, 8] += d2 * F0
             blk[b, 9] += d2 * F1
             blk[b, 10] += d2 * F2
-    while i < hi and istart[i + 1] <= k1:
+    while i < hi and istart[i + 1] <= k1:  # the rows that end with the chunk
         _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter)
         s0 = 0.0
         s1 = 0.0
