@@ -47,11 +47,24 @@ def study_variants():
     return sorted({(r.study, r.variant) for r in RUNS})
 
 
+def restitution_case():
+    """case.yaml of the first tapping run of glued rods on LAMMPS (its contact law drives
+    the restitution check), or None."""
+    for r in sorted(RUNS, key=lambda r: (r.study, r.variant, r.seed)):
+        case = CFG["_cases"][(r.study, r.variant, r.seed)]
+        if (r.engine == "lammps" and case["protocol"]["name"] == "tapping"
+                and case["particles"]["aspect_ratio"] > 0):
+            return f"{RESULTS}/{r.study}/{r.variant}/seed{r.seed}/case.yaml"
+    return None
+
+
 def get_final_output():
     out = [f"{RESULTS}/summary.csv", f"{RESULTS}/comparison.csv", f"{RESULTS}/failures.csv"]
     if any(r.engine.startswith("lammps") and CFG["_cases"][(r.study, r.variant, r.seed)]["particles"]
            ["aspect_ratio"] > 0 for r in RUNS):
         out.append(f"{RESULTS}/body_check/body_check.png")  # rods on LAMMPS: check its bodies
+    if restitution_case():  # tapped glued rods: check their side-by-side restitution
+        out.append(f"{RESULTS}/restitution_check/restitution_check.png")
     protocol = {s: st["case"]["protocol"]["name"] for s, st in CFG["studies"].items()}
     tapping = {s for s, name in protocol.items() if name == "tapping"}
     deposit = {s for s, name in protocol.items() if name == "deposit"}

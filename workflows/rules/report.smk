@@ -144,6 +144,38 @@ rule body_check:
         " --table {output.table} --figure {output.figure} 2> {log}"
 
 
+def _restitution_case(wc=None):
+    case = restitution_case()
+    if case is None:
+        raise ValueError("the restitution check needs a tapping study that runs rods on the "
+                         "'lammps' engine (glued spheres); this config has none")
+    return case
+
+
+rule restitution_check:
+    input:
+        case=_restitution_case,
+    output:
+        table=report(
+            f"{RESULTS}/restitution_check/restitution_check.csv",
+            caption="../report/restitution_check.rst",
+            category="LAMMPS glued rods",
+        ),
+        figure=report(
+            f"{RESULTS}/restitution_check/restitution_check.png",
+            caption="../report/restitution_check.rst",
+            category="LAMMPS glued rods",
+        ),
+    log:
+        f"{RESULTS}/restitution_check/restitution_check.log",
+    params:
+        work=f"{RESULTS}/restitution_check/work",
+        label=lambda wc: "/".join(_restitution_case().split("/")[-4:-2]),  # study/variant
+    shell:
+        "{PYTHON} -m workflows.scripts.restitution_check --case {input.case} --label {params.label}"
+        " --work {params.work} --table {output.table} --figure {output.figure} 2> {log}"
+
+
 rule plot_deposit:
     input:
         lambda wc: [
