@@ -1,4 +1,5 @@
 # Configuration validation, the run table and the final targets.
+import math
 import json
 import sys
 

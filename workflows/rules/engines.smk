@@ -11,6 +11,10 @@ def _threads(wc):
     return engine_setting(wc.engine, "ranks", 1)
 
 
+def _timeout_s(wc):
+    return int(math.ceil(engine_setting(wc.engine, "timeout", 3600)))
+
+
 rule run_engine:
     input:
         case=f"{RUN}/case.yaml",
@@ -21,11 +25,15 @@ rule run_engine:
         f"{RUN}/{{engine}}/log.txt",
     params:
         out=f"{RUN}/{{engine}}",
-        timeout=lambda wc: engine_setting(wc.engine, "timeout", 3600),
     wildcard_constraints:
         engine="pysim|lammps|lammps-body|liggghts",
     threads: _threads
+    # the budget is a resource, not a param: raising it must not rerun finished runs, and
+    # a cluster executor books the same wall time (runtime, minutes) for the job
+    resources:
+        timeout_s=_timeout_s,
+        runtime=lambda wc: _timeout_s(wc) // 60 + 10,
     shell:
         "{PYTHON} -m workflows.scripts.run_engine --engine {wildcards.engine}"
         " --case {input.case} --data {input.data} --out {params.out}"
-        " --ranks {threads} --threads {threads} --timeout {params.timeout} 2> {log}"
+        " --ranks {threads} --threads {threads} --timeout {resources.timeout_s} 2> {log}"
