@@ -64,6 +64,13 @@ def test_pipeline_end_to_end(tmp_path):
     again = subprocess.run(base + ["--cores", "1", "--dry-run", "all"], capture_output=True,
                            text=True)
     assert "Nothing to be done" in again.stdout + again.stderr
+    # a larger run budget is no reason to rerun finished runs (it is a resource, not a param)
+    longer = tiny_config(results)
+    longer["engines"]["pysim"]["timeout"] = 7200
+    cfg.write_text(yaml.safe_dump(longer))
+    again = subprocess.run(base + ["--cores", "1", "--dry-run", "all"], capture_output=True,
+                           text=True)
+    assert "Nothing to be done" in again.stdout + again.stderr, again.stdout[-2000:]
 
 
 def test_bad_config_stops_before_anything_runs(tmp_path):
