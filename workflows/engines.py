@@ -63,11 +63,10 @@ def supports(engine: str, case: dict) -> str | None:
             if "pressure_final" in case["protocol"]:
                 return "the lammps-body 3-D deck has no pressure_final stop"
     if name == "tapping":
-        if engine == "liggghts":
-            return ("no LIGGGHTS tapping deck yet (it needs multisphere rods on a moving mesh "
-                    "base)")
         if k != "rods":
             return f"the {engine} tapping deck is for rods (aspect_ratio > 0)"
+        if engine == "liggghts":
+            return liggghts_tap_support(case)
         return None
     if name == "deposit":
         if k != "rods":
@@ -382,7 +381,7 @@ def deck_vars_2d(case: dict) -> dict[str, str]:
 def deck_vars(case: dict, engine: str) -> dict[str, str]:
     """``-var`` values of the case's deck (compression, tapping or deposition)."""
     if case["protocol"]["name"] == "tapping":
-        return tap_deck_vars(case)
+        return liggghts_tap_vars(case) if engine == "liggghts" else tap_deck_vars(case)
     if case["protocol"]["name"] == "deposit":
         return liggghts_deposit_vars(case) if engine == "liggghts" else deposit_deck_vars(case)
     if kind(case) == "2d":
@@ -574,7 +573,8 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
                           "may have been missed): reduce dt or the compression rate, or raise "
                           f"the skin; log: {screen_path}")
     particles = work / "particles.dump"
-    if engine == "liggghts":
+    tapping = case["protocol"]["name"] == "tapping"
+    if engine == "liggghts" and not tapping:  # tapping: no box.dat (the container is fixed)
         restore_box_precision(particles, work / "box.dat", data)
     if body:
         law = ("harmonic" if kind(case) == "2d" else "hooke", float(case["contact"]["k_n"]))
@@ -585,6 +585,9 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     elif glued:
         stats = convert_glued_rods(work / "contacts.native", particles, work / "contacts.dump",
                                    work / "rods.dump")
+        os.replace(work / "rods.dump", particles)
+    elif multisphere and tapping:
+        stats = convert_liggghts_tap(work, case)
         os.replace(work / "rods.dump", particles)
     elif multisphere:
         stats = convert_multisphere_rods(work / "contacts.native", particles,
@@ -1146,3 +1149,173 @@ def convert_body_rods(vertices: Path, particles: Path, data: Path, law: tuple,
     io.finalize(out_contacts)
     io.finalize(out_particles)
     return {"dropped": 0}
+
+
+# -- LIGGGHTS tapping: multisphere rods on a moving mesh base (inputs/liggghts/in.rods.tap) -----
+#: wall fixes of LIGGGHTS' tapping deck (fix wall/gran ... store_force yes) in pysim's wall
+#: order (wall id -(k + 1)): the base plane first, then the cylinder
+LIGGGHTS_TAP_WALLS = ("wbase", "wcyl")
+
+
+def liggghts_tap_support(case: dict) -> str | None:
+    """``None`` when LIGGGHTS' tapping deck (``inputs/liggghts/in.rods.tap``) can run a
+    tapping case of 3-D rods, else the reason."""
+    p, c = case["particles"], case["contact"]
+    if p["diameter"].get("distribution", "mono") != "mono":
+        return "the LIGGGHTS tapping deck has one rod template: equal diameters (mono) only"
+    if c["law"] != "hooke":
+        return (f"the LIGGGHTS tapping deck implements the linear law (hooke/stiffness) only, "
+                f"not law {c['law']}")
+    if c.get("k_t", 0.0) <= 0.0:
+        return ("the LIGGGHTS tapping deck needs a tangential stiffness k_t > 0 (its "
+                f"tangential history model divides by it), got {c.get('k_t', 0.0)}")
+    if case["container"].get("shape") != "cylinder":
+        return (f"the LIGGGHTS tapping deck runs in a cylinder, not container shape "
+                f"{case['container'].get('shape')!r}")
+    d = p["diameter"]["mean"]
+    if not 0.5 * case["container"]["diameter"] > 0.5 * (1.0 + p["aspect_ratio"]) * d:
+        return ("LIGGGHTS inserts a rod only where its bounding sphere (diameter L + D) fits "
+                "inside the cylinder: the container diameter must exceed L + D")
+    return None
+
+
+def liggghts_tap_column(case: dict) -> float:
+    """Top of the column LIGGGHTS inserts the tapping rods into (length): pysim's column
+    (:func:`pysim.initial.random_spherocylinders_in_cylinder`, packing fraction
+    ``phi_init``) for the rod centres, raised where fix insert/pack cannot place them that
+    densely (:data:`PHI_INSERT` of the cylinder of radius ``R_c - (L + D)/2`` that the
+    centres can use), plus one bounding-sphere diameter ``L + D``."""
+    p = case["particles"]
+    d = p["diameter"]["mean"]
+    length = p["aspect_ratio"] * d
+    rc = 0.5 * case["container"]["diameter"]
+    total = p["n"] * (np.pi * d * d * length / 4.0 + np.pi * d**3 / 6.0)
+    reach = length + d  # bounding-sphere diameter
+    column = max(total / (case["protocol"]["phi_init"] * np.pi * rc * rc), reach)
+    centres = np.pi * (rc - 0.5 * reach) ** 2  # area the bounding spheres' centres can use
+    return float(max(column, total / (PHI_INSERT * centres)) + reach)
+
+
+def liggghts_tap_vars(case: dict) -> dict[str, str]:
+    """``-var`` values of LIGGGHTS' tapping deck (``inputs/liggghts/in.rods.tap``).
+
+    The same step plan, base motion and frame steps as pysim and LAMMPS
+    (:func:`pysim.protocols.tapping.plan`, :func:`tap_deck_vars`); rods are multisphere
+    templates of :func:`glued_spheres` spheres (the case's ``glued_spacing``) with the mass
+    and inertia of the solid spherocylinder; the contact law is pysim's linear
+    spring-dashpot with its ``k_n``, ``gamma_n``, ``k_t``, ``gamma_t`` (absolute damping,
+    N/m and N s/m in SI cases) and friction (the mismatches of LIGGGHTS' tangential model
+    are listed in the deck's header). The rods are inserted at random at rest below
+    :func:`liggghts_tap_column` (not pysim's start: the same number of rods only).
+    """
+    from pysim.protocols.tapping import plan, settle_drag
+
+    reason = liggghts_tap_support(case)
+    if reason:
+        raise EngineError(reason)
+    p, c, pr = case["particles"], case["contact"], case["protocol"]
+    tp = plan(pr, case["gravity"])
+    d = p["diameter"]["mean"]
+    length = p["aspect_ratio"] * d
+    v = {"n_rods": p["n"], "radius": d / 2, "length": length,
+         "spheres": glued_spheres(length, d, p.get("glued_spacing", 0.25)),
+         "density": p.get("density", 1.0), "radius_c": 0.5 * case["container"]["diameter"],
+         "height": liggghts_tap_column(case), "k_n": c["k_n"], "gamma_n": c.get("gamma_n", 0.0),
+         "k_t": c["k_t"], "gamma_t": c.get("gamma_t", 0.0), "mu": c.get("friction", 0.0),
+         "mu_wall": c.get("wall_friction", c.get("friction", 0.0)), "g": case["gravity"],
+         "dt": pr["dt"], "drag": settle_drag(case)[0], "settle_steps": tp.settle_steps,
+         "relax_steps": tp.start - tp.settle_steps, "freq": 1.0 / tp.period,
+         "amp": tp.amplitude, "taps": pr["taps"], "frames_per_tap": tp.frames_per_tap,
+         "thermo_every": case.get("output", {}).get("thermo_every", 1000),
+         "seed": _insertion_seed(case.get("seed", 1)),
+         # the skin of LAMMPS' tapping deck (rods thrown off a landing column move fast)
+         "skin": 0.4 * d}
+    return {k: repr(float(x)) if isinstance(x, float) else str(x) for k, x in v.items()}
+
+
+def liggghts_tap_wall_contacts(frame, table, cols, radius_c: float, z_base: float):
+    """Sphere-wall contacts of LIGGGHTS' tapping deck from the wall forces it stores on each
+    sphere (``f_force_wbase[1..3]``, ``f_force_wcyl[1..3]`` columns of the sphere dump,
+    rows in ``frame`` order): one row per sphere and wall with a nonzero force, ``j`` = -1
+    for the base (at height ``z_base``, normal ``-z``, overlap ``R - (z - z_base)``) and -2
+    for the cylinder of radius ``radius_c`` about the z axis (normal radially outwards,
+    overlap ``R - (radius_c - r)``), pysim's numbering; contact point in the middle of the
+    overlap, force on the sphere. Returns a :class:`analysis.frame.Contacts`."""
+    from analysis.frame import Contacts
+
+    c = {name: k for k, name in enumerate(cols)}
+    rows = []
+    for w, fix in enumerate(LIGGGHTS_TAP_WALLS):
+        force = table[:, [c[f"f_force_{fix}[{k}]"] for k in (1, 2, 3)]]
+        on = np.flatnonzero(np.any(force != 0.0, axis=1))
+        x = frame.x[on]
+        normal = np.zeros((len(on), 3))
+        if fix == "wbase":
+            normal[:, 2] = -1.0
+            gap = x[:, 2] - z_base
+        else:
+            r = np.hypot(x[:, 0], x[:, 1])
+            normal[:, 0] = x[:, 0] / np.where(r > 0, r, 1.0)
+            normal[:, 1] = x[:, 1] / np.where(r > 0, r, 1.0)
+            gap = radius_c - r
+        overlap = frame.radius[on] - gap
+        point = x + (frame.radius[on] - 0.5 * overlap)[:, None] * normal
+        rows.append((frame.ids[on], np.full(len(on), -(w + 1)), point, normal, overlap,
+                     force[on]))
+    i, j, point, normal, overlap, force = (np.concatenate(x) for x in zip(*rows))
+    return Contacts(frame.step, i.astype(np.int64), j.astype(np.int64), point, normal, overlap,
+                    force)
+
+
+def convert_liggghts_tap(work: Path, case: dict) -> dict:
+    """Output of LIGGGHTS' tapping deck in ``work`` -> ``rods.dump`` and ``contacts.dump``
+    (common format) there.
+
+    As :func:`convert_multisphere_rods`: spheres become rods (body id ``id_multisphere``),
+    sphere-sphere contacts (geometry recomputed from the frame) and sphere-wall contacts
+    (:func:`liggghts_tap_wall_contacts`, base at the plan's height of the frame's step)
+    merge per rod pair and per rod and wall. Raises :class:`EngineError` when the frames
+    are not those of the plan (:func:`pysim.protocols.tapping.plan`).
+    """
+    from analysis.frame import Contacts
+    from analysis.io import read_particle_frames
+    from pysim.protocols.tapping import plan
+
+    tp = plan(case["protocol"], case["gravity"])
+    rc = 0.5 * case["container"]["diameter"]
+    particles, native = work / "particles.dump", work / "contacts.native"
+    spheres = {f.step: f for f in read_particle_frames(particles)}
+    if sorted(spheres) != [int(s) for s in tp.frame_steps]:
+        raise EngineError(f"{particles}: frames at steps {sorted(spheres)[:5]}... do not follow "
+                          f"the tapping plan ({len(tp.frame_steps)} frames from step "
+                          f"{tp.start}); log: {work / 'screen.txt'}")
+    body, walls = {}, {}
+    for step, _b, _p, cols, table in _iter_dump(particles):
+        c = {name: k for k, name in enumerate(cols)}
+        order = np.argsort(table[:, c["id"]], kind="stable")
+        body[step] = table[order, c["id_multisphere"]].astype(np.int64)
+        walls[step] = liggghts_tap_wall_contacts(spheres[step], table[order], cols, rc,
+                                                 float(tp.base_height(step)))
+    local = {step: table for step, _box, _cols, table in _iter_local(native)}
+    dropped = 0
+    out_contacts, out_particles = work / "contacts.dump", work / "rods.dump"
+    with open(io.part_path(out_contacts), "w") as fc, open(io.part_path(out_particles), "w") as fp:
+        for step in sorted(spheres):
+            if step not in local:
+                raise EngineError(f"{native}: no contact frame at step {step}")
+            table, fr = local[step], spheres[step]
+            ids_i, ids_j = table[:, 6], table[:, 7]
+            n, delta, point = _geometry(fr, ids_i, ids_j)
+            keep = delta > 0
+            dropped += int(np.count_nonzero(~keep))
+            w = walls[step]
+            sph = Contacts(step, np.concatenate([ids_i[keep].astype(np.int64), w.i]),
+                           np.concatenate([ids_j[keep].astype(np.int64), w.j]),
+                           np.concatenate([point[keep], w.point]),
+                           np.concatenate([n[keep], w.normal]),
+                           np.concatenate([delta[keep], w.overlap]),
+                           np.concatenate([table[keep, 9:12], w.force]))
+            _write_glued_frame(fp, fc, fr, sph, body[step])
+    io.finalize(out_contacts)
+    io.finalize(out_particles)
+    return {"dropped": dropped}
