@@ -120,3 +120,21 @@ def test_jammed_reports_unbalanced_forces_as_not_converged(tmp_path):
     assert not res["fire_balanced"]
     assert not res["converged"]
     assert res["force_residual_max"] > 1e-3
+
+
+def test_converged_needs_the_energy_and_balanced_forces():
+    """``is_converged``: U/L^d within a factor 2 of the target, and forces balanced by
+    FIRE's absolute tolerance or to BALANCE_TOL of the mean contact force (the alpha 0.01,
+    N = 1024 state: residuals 2e-4, FIRE short of 1e-13); the false jammed state of alpha 3
+    (residuals 7 % and 85 %) and any state off the energy target are not converged."""
+    from pysim.protocols.jammed import BALANCE_TOL, is_converged
+
+    good = {"energy_density": 8.0e-16, "fire_balanced": False, "force_residual_max": 2.2e-4,
+            "torque_residual_max": 1.5e-5}
+    assert is_converged(good, 1e-15)
+    assert is_converged({**good, "fire_balanced": True, "force_residual_max": 0.5}, 1e-15)
+    assert not is_converged({**good, "force_residual_max": 0.85}, 1e-15)
+    assert not is_converged({**good, "torque_residual_max": 2 * BALANCE_TOL}, 1e-15)
+    assert not is_converged({**good, "force_residual_max": float("nan")}, 1e-15)
+    assert not is_converged({**good, "energy_density": 2.0e-12, "fire_balanced": True}, 1e-15)
+    assert not is_converged({**good, "energy_density": 4.0e-16}, 1e-15)
