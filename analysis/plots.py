@@ -28,18 +28,29 @@ def _style(engine, seed_index):
     return dict(color=ENGINE_COLORS.get(engine, "k"), ls=SEED_STYLES[seed_index % len(SEED_STYLES)])
 
 
+def _run_style(r):
+    """Line style of a run dict; ``points=True`` (the slabs of a settled bed, not a
+    sequence in time): markers without a line."""
+    st = _style(r["engine"], r["seed_index"])
+    return {**st, "ls": "none"} if r.get("points") else st
+
+
 def pressure_vs_phi(runs, out, p_scale=1.0, window=None, phi_min=None):
     """Contact pressure (units of ``p_scale``) versus packing fraction, one line per run,
     with each run's jamming fit drawn.
 
     ``runs``: list of dicts with ``engine``, ``seed_index``, ``thermo`` (DataFrame with
-    ``phi``, ``pressure``), and optionally ``phi_j``, ``slope``.
+    ``phi``, ``pressure``), and optionally ``phi_j``, ``slope``, ``points`` (draw markers,
+    no line: the slabs of a settled bed).
     """
     fig, (ax, axl) = plt.subplots(1, 2, figsize=(11, 4.2))
     for r in runs:
         th = r["thermo"]
-        st = _style(r["engine"], r["seed_index"])
-        label = f"{r['engine']} seed {r['seed']}"
+        st = _run_style(r)
+        if r.get("points"):
+            st["marker"] = "s"
+        label = f"{r['engine']} seed {r['seed']}" + (" (settled bed, slabs)" if r.get("points")
+                                                     else "")
         ax.plot(th.phi, th.pressure / p_scale, lw=1.2, label=label, **st)
         axl.semilogy(th.phi, np.clip(th.pressure / p_scale, 1e-9, None), lw=1.0, **st)
         if np.isfinite(r.get("phi_j", np.nan)) and np.isfinite(r.get("slope", np.nan)):
@@ -78,7 +89,7 @@ def contacts_vs_phi(runs, out, z_iso=None, phi_min=None):
     ax = axes[0, 0]
     for r in runs:
         cv = r["curves"]
-        st = _style(r["engine"], r["seed_index"])
+        st = _run_style(r)
         m = cv.z_rattler_free > 0
         ax.plot(cv.phi[m], cv.z_rattler_free[m], marker="o", ms=3, lw=1,
                 label=f"{r['engine']} seed {r['seed']}", **st)
@@ -96,7 +107,7 @@ def contacts_vs_phi(runs, out, z_iso=None, phi_min=None):
         ax2 = axes[0, 1]
         for r in runs:
             cv = r["curves"]
-            st = _style(r["engine"], r["seed_index"])
+            st = _run_style(r)
             for c, mfc in zip(order, ("auto", "none", "none")):
                 if c in cv:
                     ax2.plot(cv.phi, cv[c], marker="o", ms=3, lw=0.8, mfc=mfc, **st)
@@ -230,7 +241,7 @@ def tapping_curves(runs, out, phi_max=None, n_layers: int = 4, layer_label: str 
         ax.xaxis.set_minor_formatter(NullFormatter())
     axes[0, 0].legend(fontsize=6, loc="lower right")
     fig.suptitle("tapping: thin lines raw frames, thick the moving average over one oscillation; "
-                 "solid pysim, dashed LAMMPS", fontsize=9)
+                 "solid pysim, dashed LAMMPS, dotted LIGGGHTS", fontsize=9)
     fig.tight_layout()
     _save(fig, out)
 
@@ -413,7 +424,8 @@ def pressure_by_variant(runs, out, p_scale=1.0, parameter=None):
     panel, coloured by variant (line style by engine): how ``p(phi)`` changes with the
     varying parameter (e.g. the compression rate). ``runs``: dicts with ``variant``,
     ``value`` (of ``parameter``, for the legend and the colour order), ``engine``,
-    ``seed``, ``thermo`` and optionally ``phi_j`` (a marker on the curve's axis)."""
+    ``seed``, ``thermo`` and optionally ``phi_j`` (a marker on the curve's axis) and
+    ``points`` (markers without a line: the slabs of a settled bed)."""
     order = sorted({(r["value"], r["variant"]) for r in runs}, key=lambda t: (str(type(t[0])), t))
     cmap = plt.get_cmap("viridis", max(len(order), 2))
     colour = {v: cmap(k) for k, (_val, v) in enumerate(order)}
@@ -428,8 +440,10 @@ def pressure_by_variant(runs, out, p_scale=1.0, parameter=None):
             seen.add(key)
             name = f"{parameter} = {r['value']:g}" if parameter else r["variant"]
             label = f"{name} ({r['engine']})"
+        line = dict(ls="none", marker="s", ms=3) if r.get("points") else \
+            dict(ls=styles.get(r["engine"], "-"))  # points: the slabs of a settled bed
         ax.semilogy(th.phi, np.clip(th.pressure / p_scale, 1e-9, None), lw=1.0,
-                    color=colour[r["variant"]], ls=styles.get(r["engine"], "-"), label=label)
+                    color=colour[r["variant"]], label=label, **line)
         if np.isfinite(r.get("phi_j", np.nan)):
             ax.axvline(r["phi_j"], color=colour[r["variant"]], lw=0.6, alpha=0.6,
                        ls=styles.get(r["engine"], "-"))

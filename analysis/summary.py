@@ -143,7 +143,7 @@ def tidy(rows, study, case, engine, seed, parameters: dict | None = None) -> pd.
     return df
 
 
-def analyse_jammed(run_dir, c_min: int | None = None):
+def analyse_jammed(run_dir, c_min: int | None = None, energy_target: float | None = None):
     """Observables of a mechanically stable packing (pysim's ``jammed`` protocol).
 
     ``phi_j`` comes from ``jammed.json``; the residual forces and torques of the
@@ -153,9 +153,14 @@ def analyse_jammed(run_dir, c_min: int | None = None):
     ``z_j`` (rattler-free, each
     contact once: ``z_tilde``), ``z_j_bonds`` (2-D parallel side contacts counted twice),
     the fractions of tip-tip, tip-side and side-side contacts, and the orientational
-    order ``s2``, ``s4`` (2-D) or ``s_nematic`` (3-D) of the final frame.
+    order ``s2``, ``s4`` (2-D) or ``s_nematic`` (3-D) of the final frame. ``converged``
+    is pysim's verdict, or, given the case's ``energy_target``, that of
+    :func:`pysim.protocols.jammed.is_converged` on the record (the same rule for records
+    written before it changed).
     """
     import json
+
+    from pysim.protocols.jammed import is_converged
 
     from analysis.balance import ForceBalance
     from analysis.contacts import TYPE_NAMES, ContactTypes
@@ -178,7 +183,8 @@ def analyse_jammed(run_dir, c_min: int | None = None):
             ("torque_residual_split_max", bal.torque_split_max, np.nan),
             ("kink_contacts", float(bal.n_kink), np.nan),
             ("bisections", float(res["bisections"]), np.nan),
-            ("converged", float(res["converged"]), np.nan)]
+            ("converged", float(res["converged"] if energy_target is None
+                                else is_converged(res, energy_target)), np.nan)]
     if np.any(frame.length > 0):
         types = ContactTypes().compute(frame, contacts)
         rows += [(f"fraction_{k.replace('-', '_')}", float(v), np.nan)
@@ -354,3 +360,133 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
         ok = on_base.any() and weight > 0  # tables without wall rows (LAMMPS) say nothing
         rows.append(("apparent_mass_fraction", f_up / weight if ok else np.nan, np.nan))
     return rows, prof
+
+
+def settled_window(frame, margins, floor: float = 0.0) -> tuple[float, float, float]:
+    """Bulk window ``(lo, hi, top)`` of a bed settled on a floor at height ``floor``:
+    ``lo = floor + margins[0] l``, ``hi = top - margins[1] l``, with ``l`` the largest
+    particle length ``L + D`` and ``top`` the free surface (the mean over columns of side
+    ``l`` of the highest grain surface, :func:`analysis.packing.surface_height`). Raises
+    ValueError when the bed is too thin for the margins."""
+    from analysis.packing import surface_height
+
+    margins = [float(m) for m in margins]
+    if len(margins) != 2 or min(margins) < 0:
+        raise ValueError(f"margins must be two numbers >= 0 (particle lengths above the floor "
+                         f"and below the surface), got {margins}")
+    ell = float(np.max(frame.length + 2.0 * frame.radius))
+    top = surface_height(frame)
+    lo, hi = floor + margins[0] * ell, top - margins[1] * ell
+    if not hi > lo:
+        raise ValueError(f"a bed {top - floor:.4g} high (particle length {ell:.4g}) leaves no bulk "
+                         f"between {margins[0]} lengths above the floor and {margins[1]} below "
+                         "the surface: settle more particles or use smaller margins")
+    return lo, hi, top
+
+
+def _settled_layer(frame, pairs, fixed, lo: float, hi: float, c_min: int) -> dict:
+    """Observables of the particles whose centre lies in ``[lo, hi)`` (one row); rattlers
+    are removed inside the layer only, its surroundings held fixed (see
+    :func:`analyse_settled`). ``pairs`` ``(a, b, contacts)``: row indices of the
+    particle-particle contacts and the whole table; ``fixed`` (N,) wall contacts."""
+    from analysis.contacts import contact_counts, remove_rattlers
+    from analysis.packing import slab_packing_fraction
+    from analysis.stress import StressProfile
+
+    a, b, contacts = pairs
+    v = frame.vertical
+    inside = (frame.x[:, v] >= lo) & (frame.x[:, v] < hi)
+    both = inside[a] & inside[b]
+    # contacts with particles outside the layer count like wall contacts: never removed
+    held = (fixed + np.bincount(a[inside[a] & ~inside[b]], minlength=frame.n)
+            + np.bincount(b[inside[b] & ~inside[a]], minlength=frame.n))
+    ratt = remove_rattlers(frame.n, a[both], b[both], c_min, held) & inside
+    keep = both & ~(ratt[a] | ratt[b])
+    c_all = contact_counts(frame.n, a, b) + fixed
+    c_free = contact_counts(frame.n, a[keep], b[keep]) + held
+    backbone = inside & ~ratt
+    order = NematicOrder().compute(frame.subset(inside)) if inside.any() else None
+    stress = StressProfile(edges=[lo, hi]).compute(frame, contacts)
+    return {"phi": float(slab_packing_fraction(frame, [lo, hi])[0]),
+            "pressure": float(stress.pressure[0]),
+            "sigma_vv": float(-stress.sigma_vv[0]), "sigma_hh": float(-stress.sigma_hh[0]),
+            "z": float(np.mean(c_all[inside])) if inside.any() else np.nan,
+            "z_rattler_free": float(np.mean(c_free[backbone])) if backbone.any() else np.nan,
+            "n_rattlers": int(np.count_nonzero(ratt)), "n": int(inside.sum()),
+            "s_nematic": order.S if order is not None else np.nan,
+            "p2_z": order.gravity_order if order is not None else np.nan}
+
+
+def analyse_settled(run_dir, margins, floor: float = 0.0, c_min: int | None = None):
+    """Observables of a jammed bed settled under gravity (LIGGGHTS' substitute for the
+    compression of rods, ``inputs/liggghts/in.rods.settle``), from its last frame, in the
+    bulk window of :func:`settled_window` (``margins`` in particle lengths above the floor
+    at ``floor`` and below the free surface):
+
+    * ``phi_j``: packing fraction of the window (exact grain volume between its planes
+      over ``A (hi - lo)``); uncertainty: the standard error of the packing fractions of
+      the window's slabs one particle length thick;
+    * ``z_j``: mean rattler-free contact number of the non-rattlers whose centre lies in
+      the window. Rattlers (the threshold rule of :class:`analysis.contacts.ContactNumber`,
+      ``c_min`` as there: 6 for 3-D rods) are removed iteratively *inside the window
+      only*: the particles outside it are held fixed, their contacts with the window's
+      particles count and never disappear (as wall contacts). Over the whole bed the rule
+      would start at the free surface, whose rods are held by gravity rather than by six
+      contacts, and strip the bed layer by layer (measured: every rod of a 60-rod bed with
+      8 contacts per rod on average). ``z_j_with_rattlers`` (every particle in the
+      window, every contact), ``rattler_fraction_j``;
+    * ``pressure_bulk`` (contact pressure of the window, particle-centre weighting) and
+      ``pressure_bulk_max`` (that of its lowest slab): how far above jamming the bulk is;
+      ``sigma_ratio_bulk``: horizontal over vertical normal stress;
+    * ``s_nematic_j`` and ``p2_z_j`` (order with respect to gravity, ``<P2(u_z)>``: 0
+      isotropic, -1/2 all horizontal) of the window's rods; ``n_bulk`` particles in it;
+      ``bulk_lo``, ``bulk_hi``, ``bed_height`` (lengths).
+
+    Curves: one row per slab one particle length thick from the floor to the top (the
+    same columns, each slab taken as its own window for the rattlers, plus ``lo``,
+    ``hi``, ``depth`` below the surface and ``bulk`` = 1 for slabs inside the window), so
+    that ``phi``, ``pressure`` and ``z`` over the slabs show the gravity gradient.
+    """
+    from analysis.contacts import default_c_min
+    from analysis.walls import split_wall_contacts
+
+    run = RunData(run_dir)
+    frames = run.frames()
+    if not frames:
+        raise ValueError(f"{run_dir}: no frames in particles.dump")
+    frame, contacts = frames[-1]
+    lo, hi, top = settled_window(frame, margins, floor)
+    ell = float(np.max(frame.length + 2.0 * frame.radius))
+    pp, walls = split_wall_contacts(frame, contacts)
+    pairs = (frame.index_of(pp.i), frame.index_of(pp.j), contacts)
+    fixed = np.bincount(frame.index_of(walls.i), minlength=frame.n)
+    c_min = default_c_min(frame) if c_min is None else c_min
+    bulk = _settled_layer(frame, pairs, fixed, lo, hi, c_min)
+    k = max(int(np.floor((hi - lo) / ell)), 1)
+    slab_edges = np.linspace(lo, hi, k + 1)
+    slabs = [_settled_layer(frame, pairs, fixed, s, e, c_min)
+             for s, e in zip(slab_edges[:-1], slab_edges[1:])]
+    phis = np.array([s["phi"] for s in slabs])
+    phi_err = float(np.std(phis, ddof=1) / np.sqrt(len(phis))) if len(phis) > 1 else np.nan
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = bulk["sigma_hh"] / bulk["sigma_vv"]
+    rows = [("phi_j", bulk["phi"], phi_err),
+            ("z_j", bulk["z_rattler_free"], np.nan),
+            ("z_j_with_rattlers", bulk["z"], np.nan),
+            ("rattler_fraction_j", bulk["n_rattlers"] / bulk["n"] if bulk["n"] else np.nan,
+             np.nan),
+            ("s_nematic_j", bulk["s_nematic"], np.nan), ("p2_z_j", bulk["p2_z"], np.nan),
+            ("pressure_bulk", bulk["pressure"], np.nan),
+            ("pressure_bulk_max", float(slabs[0]["pressure"]), np.nan),
+            ("sigma_ratio_bulk", float(ratio), np.nan),
+            ("n_bulk", float(bulk["n"]), np.nan), ("bulk_lo", lo, np.nan),
+            ("bulk_hi", hi, np.nan), ("bed_height", top - floor, np.nan)]
+    # the whole bed in slabs one particle length thick, for the profiles
+    edges = floor + ell * np.arange(int(np.ceil((top - floor) / ell)) + 1)
+    prof = []
+    for s, e in zip(edges[:-1], edges[1:]):
+        row = _settled_layer(frame, pairs, fixed, s, e, c_min)
+        row.update(step=frame.step, lo=s, hi=e, depth=top - 0.5 * (s + e),
+                   bulk=int(s >= lo - 1e-9 and e <= hi + 1e-9))
+        prof.append(row)
+    return rows, pd.DataFrame(prof), run.thermo

@@ -39,6 +39,11 @@ PARAMETER_NAMES = {
 }
 
 
+#: case keys that set up one engine's stand-in protocol (LIGGGHTS' settling of rods in a
+#: compression study), not the physics every engine runs: never a varying parameter
+ENGINE_ONLY = ("protocol.settle.",)
+
+
 class ConfigError(ValueError):
     """A configuration or case file is invalid; the message is one line."""
 
@@ -256,6 +261,14 @@ def _check_case(case: dict, source: str, at: str):
             raise ConfigError(
                 f"{source}: {at}protocol.phi_fast = {pr['phi_fast']} must lie between phi_init "
                 f"= {pr['phi_init']} and phi_final = {pr['phi_final']}")
+        settle = pr.get("settle")
+        if settle is not None and alpha > 0:  # LIGGGHTS' settling of rods (engines.py)
+            reach = size_extremes(d)[2] * (1.0 + alpha)
+            w_min = 2.0 * (reach + 0.2 * d["mean"])
+            if settle["width"] <= w_min:
+                raise ConfigError(
+                    f"{source}: {at}protocol.settle.width = {settle['width']} lets a rod meet its "
+                    f"own periodic image; use a width > 2 (L + D + 0.2 D) = {w_min:.4g}")
     if pr["name"] == "growth" and pr["phi_grow"] <= pr["phi_init"]:
         raise ConfigError(f"{source}: {at}protocol.phi_grow = {pr['phi_grow']} must be above "
                           f"phi_init = {pr['phi_init']}")
@@ -520,13 +533,15 @@ def varying_parameters(config: dict, study: str) -> dict[str, dict[str, object]]
     """Case parameters that differ between the variants of a study.
 
     Returns ``{column name: {variant: value}}``; columns use the science symbols of
-    :data:`PARAMETER_NAMES` where one exists, else the last key.
+    :data:`PARAMETER_NAMES` where one exists, else the last key. Keys under
+    :data:`ENGINE_ONLY` are left out.
     """
     flat = {}
     for (s, v, _), case in config["_cases"].items():
         if s == study:
             flat[v] = _flatten({k: val for k, val in case.items() if k != "seed"})
     keys = set().union(*[set(f) for f in flat.values()]) if flat else set()
+    keys = {k for k in keys if not k.startswith(ENGINE_ONLY)}
     out = {}
     for key in sorted(keys):
         values = {v: f.get(key) for v, f in flat.items()}

@@ -86,9 +86,8 @@ def supports(engine: str, case: dict) -> str | None:
         return None  # overdamped: emulated by strong drag against the deforming box
     if case["protocol"].get("integrator", "verlet") != "verlet":
         return f"{engine} integrates inertial dynamics only (no overdamped integrator)"
-    if k == "rods" and engine == "liggghts":
-        return ("LIGGGHTS cannot compress multisphere rods with fix deform ('fix deform and fix "
-                "multisphere are incompatible', shared/engines.md)")
+    if k == "rods" and engine == "liggghts":  # settles under gravity instead (protocol.settle)
+        return liggghts_settle_support(case)
     if k == "rods" and case["contact"].get("friction", 0.0) > 0:
         return f"the {engine} rods deck is frictionless"
     return None
@@ -101,6 +100,8 @@ def deck(engine: str, case: dict) -> Path:
         raise EngineError(reason)
     if engine == "lammps-body":
         return INPUTS / "lammps" / f"in.{'2d' if kind(case) == '2d' else 'rods'}.body.compress"
+    if settles(engine, case):
+        return INPUTS / "liggghts" / "in.rods.settle"
     return INPUTS / engine / f"in.{kind(case)}.{DECK_SUFFIX[case['protocol']['name']]}"
 
 
@@ -339,6 +340,162 @@ def _ke_peak(screen: Path, step: int) -> float:
     return peak
 
 
+# -- LIGGGHTS random packings of rods: gravity settling (inputs/liggghts/in.rods.settle) -------
+# LIGGGHTS cannot compress multisphere rods (fix deform is refused with fix multisphere) nor
+# read our random start; a compression case that has a protocol.settle block runs on it as
+# the settling of randomly inserted rods onto a floor in a box periodic in x and y, and the
+# analysis measures phi_J and z_J in a bulk window of the bed (analysis.summary.
+# analyse_settled). What differs from the compression is said in the deck's header.
+
+#: wall id of the floor in the contact table of a settled bed (its only wall)
+SETTLE_FLOOR_ID = -1
+#: rod volume over the volume of the part of the insertion column their centres can use
+#: (fix insert/pack keeps a rod's bounding sphere, diameter L + D, inside the column: also
+#: across the periodic faces): measured at most 0.50-0.52 (alpha 1 in W = 8 D, alpha 4 in
+#: W = 12 D; 0.15 and 0.26 of the whole column)
+PHI_INSERT_SETTLE = 0.35
+
+
+def settles(engine: str, case: dict) -> bool:
+    """Whether ``engine`` runs the compression case ``case`` as gravity settling
+    (LIGGGHTS with rods: ``inputs/liggghts/in.rods.settle``)."""
+    return (engine == "liggghts" and kind(case) == "rods"
+            and case["protocol"]["name"] == "compress")
+
+
+def settle_plan(case: dict) -> dict:
+    """The validated case's ``protocol.settle`` block (defaults from the case schema) with
+    ``n`` defaulting to ``particles.n``: ``n`` rods, periodic box side ``width`` and
+    ``gravity`` (units of the case), ``bulk`` margins (in particle lengths ``L + D``),
+    ``ke_ratio``, ``max_time`` (time), ``dump_every`` (steps)."""
+    given = case["protocol"].get("settle")
+    if given is None:
+        raise EngineError("the case has no protocol.settle block (LIGGGHTS' gravity settling "
+                          "of rods needs one: width, and optionally n, gravity, bulk)")
+    return {"n": case["particles"]["n"], **given}
+
+
+def liggghts_settle_support(case: dict) -> str | None:
+    """``None`` when ``in.rods.settle`` can stand in for the compression of the (3-D
+    rod) case on LIGGGHTS, else the reason."""
+    p, c, pr = case["particles"], case["contact"], case["protocol"]
+    if "settle" not in pr:
+        return ("LIGGGHTS cannot compress multisphere rods with fix deform ('fix deform and fix "
+                "multisphere are incompatible', shared/engines.md); add protocol.settle to run "
+                "its gravity-settling substitute (inputs/liggghts/in.rods.settle)")
+    if p["diameter"].get("distribution", "mono") != "mono":
+        return "the LIGGGHTS settling deck has one rod template: equal diameters (mono) only"
+    if c["law"] != "hooke" or c.get("friction", 0.0) > 0:
+        return ("the LIGGGHTS settling deck implements the frictionless linear law only (got law "
+                f"{c['law']}, friction {c.get('friction', 0.0)})")
+    if pr.get("integrator", "verlet") != "verlet":
+        return "liggghts integrates inertial dynamics only (no overdamped integrator)"
+    return None
+
+
+def settle_column_height(case: dict) -> float:
+    """Height of the column LIGGGHTS inserts the settling rods into (length): the rod
+    volume fills :data:`PHI_INSERT_SETTLE` of the part of it their centres can use (a
+    square of side ``W - (L + D)``), plus one rod length ``L + D``."""
+    from workflows.case import particle_measure
+
+    p = case["particles"]
+    plan = settle_plan(case)
+    d = p["diameter"]["mean"]
+    reach = (1.0 + p["aspect_ratio"]) * d
+    volume = plan["n"] * particle_measure(d, p["aspect_ratio"], 3)
+    return volume / (PHI_INSERT_SETTLE * (plan["width"] - reach) ** 2) + reach
+
+
+def liggghts_settle_vars(case: dict) -> dict[str, str]:
+    """``-var`` values of ``inputs/liggghts/in.rods.settle`` for a compression case with a
+    ``protocol.settle`` block (:func:`settle_plan`): the compression's contact law
+    (``k_n``, ``gamma_n``, drag ``gamma_bg`` per rod), time step and glued-sphere spacing;
+    the settle block's rod number, box side, gravity and stop (kinetic energy below
+    ``ke_ratio`` of its peak, or ``max_time``)."""
+    reason = liggghts_settle_support(case)
+    if reason:
+        raise EngineError(reason)
+    p, c, pr = case["particles"], case["contact"], case["protocol"]
+    plan = settle_plan(case)
+    d = p["diameter"]["mean"]
+    length = p["aspect_ratio"] * d
+    dt = pr["dt"]
+    every = case.get("output", {}).get("thermo_every", 1000)
+    v = {"width": plan["width"], "height": settle_column_height(case), "n_rods": plan["n"],
+         "radius": d / 2, "length": length,
+         "spheres": glued_spheres(length, d, p.get("glued_spacing", 0.25)),
+         "density": p.get("density", 1.0), "k_n": c["k_n"], "gamma_n": c.get("gamma_n", 0.0),
+         "gamma_bg": c.get("gamma_bg", 0.0), "g": plan["gravity"],
+         "seed": _insertion_seed(case.get("seed", 1)), "dt": dt,
+         "check_every": every, "thermo_every": every, "min_steps": every,
+         "max_steps": int(np.ceil(plan["max_time"] / dt)),
+         "settle_ratio": plan["ke_ratio"], "dump_every": plan["dump_every"], "skin": 0.2 * d}
+    return {k: repr(float(x)) if isinstance(x, float) else str(x) for k, x in v.items()}
+
+
+def floor_contacts(frame, table, cols):
+    """Sphere-floor contacts of the settling deck from the floor force it stores on each
+    sphere (``f_force_floor[1..3]`` columns of the sphere dump, rows in ``frame`` order):
+    one row per sphere with a nonzero force, ``j`` = :data:`SETTLE_FLOOR_ID`, normal
+    ``-z`` (towards the floor), overlap ``R - z``, point in the middle of the overlap,
+    force on the sphere. Returns a :class:`analysis.frame.Contacts`."""
+    from analysis.frame import Contacts
+
+    c = {name: k for k, name in enumerate(cols)}
+    force = table[:, [c[f"f_force_floor[{k}]"] for k in (1, 2, 3)]]
+    on = np.flatnonzero(np.any(force != 0.0, axis=1))
+    normal = np.tile([0.0, 0.0, -1.0], (len(on), 1))
+    overlap = frame.radius[on] - frame.x[on, 2]
+    point = frame.x[on] + (frame.radius[on] - 0.5 * overlap)[:, None] * normal
+    return Contacts(frame.step, frame.ids[on].astype(np.int64),
+                    np.full(len(on), SETTLE_FLOOR_ID, dtype=np.int64), point, normal, overlap,
+                    force[on])
+
+
+def convert_settled_rods(native: Path, particles: Path, out_contacts: Path,
+                         out_particles: Path) -> dict:
+    """Output of the settling deck (multisphere rods) -> rods and contacts in the common
+    format, as :func:`convert_multisphere_rods` does for the deposition deck: sphere frames
+    (``id id_multisphere type x y z radius f_force_floor[1..3]``) become rods (body id =
+    rod id), sphere-sphere contacts (geometry recomputed from the frame, minimum image
+    across the periodic x and y) and sphere-floor contacts (:func:`floor_contacts`) merge
+    per rod pair and per rod (a rod lying flat on the floor: one merged row)."""
+    from analysis.frame import Contacts
+    from analysis.io import read_particle_frames
+
+    spheres = {f.step: f for f in read_particle_frames(particles)}
+    body, floor = {}, {}
+    for step, _b, _p, cols, table in _iter_dump(particles):
+        c = {name: k for k, name in enumerate(cols)}
+        order = np.argsort(table[:, c["id"]], kind="stable")
+        body[step] = table[order, c["id_multisphere"]].astype(np.int64)
+        floor[step] = floor_contacts(spheres[step], table[order], cols)
+    dropped = 0
+    with open(io.part_path(out_contacts), "w") as fc, open(io.part_path(out_particles), "w") as fp:
+        for step, _box, _cols, table in _iter_local(native):
+            if step not in spheres:
+                raise EngineError(f"{native}: contact frame at step {step} has no particle "
+                                  f"frame in {particles}")
+            fr = spheres[step]
+            ids_i, ids_j = table[:, 6], table[:, 7]
+            n, delta, point = _geometry(fr, ids_i, ids_j)
+            keep = delta > 0
+            dropped += int(np.count_nonzero(~keep))
+            w = floor[step]
+            sph = Contacts(step, np.concatenate([ids_i[keep].astype(np.int64), w.i]),
+                           np.concatenate([ids_j[keep].astype(np.int64), w.j]),
+                           np.concatenate([point[keep], w.point]),
+                           np.concatenate([n[keep], w.normal]),
+                           np.concatenate([delta[keep], w.overlap]),
+                           np.concatenate([table[keep, 9:12], w.force]))
+            _write_glued_frame(fp, fc, fr, sph, body[step])
+    io.finalize(out_contacts)
+    io.finalize(out_particles)
+    return {"dropped": dropped}
+# -- end of LIGGGHTS random packings of rods --------------------------------------------------------
+
+
 def restart_interval(case: dict) -> int:
     """Steps between LAMMPS restart files: every :data:`RESTART_DUMPS` dump intervals
     (tapping: frame intervals; deposition: thermo rows)."""
@@ -384,6 +541,8 @@ def deck_vars(case: dict, engine: str) -> dict[str, str]:
         return liggghts_tap_vars(case) if engine == "liggghts" else tap_deck_vars(case)
     if case["protocol"]["name"] == "deposit":
         return liggghts_deposit_vars(case) if engine == "liggghts" else deposit_deck_vars(case)
+    if settles(engine, case):
+        return liggghts_settle_vars(case)
     if kind(case) == "2d":
         v = deck_vars_2d(case)
         if engine == "lammps-body":  # one body per rod: no disks, no ghost cutoff, masses
@@ -516,6 +675,9 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
         json.loads((work / "resume.json").read_text()) == stamp
     lammps = engine in ("lammps", "lammps-body")
     restart = latest_restart(work) if lammps and same else None
+    lig_tap = engine == "liggghts" and case["protocol"]["name"] == "tapping"  # resumes too
+    if lig_tap and same:
+        restart = liggghts_latest_restart(work)
     if restart is not None:
         step = int(restart.name.split(".")[-1])
         cut_outputs(work, step)
@@ -528,7 +690,7 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
             shutil.rmtree(work)
         work.mkdir(parents=True)
         io.atomic_write_text(work / "resume.json", json.dumps(stamp))
-    if lammps:
+    if lammps or lig_tap:
         extra["restart_every"] = restart_interval(case)
     engine_data = Path(data).resolve()
     body = engine == "lammps-body"
@@ -589,6 +751,10 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     elif multisphere and tapping:
         stats = convert_liggghts_tap(work, case)
         os.replace(work / "rods.dump", particles)
+    elif settles(engine, case):
+        stats = convert_settled_rods(work / "contacts.native", particles, work / "contacts.dump",
+                                     work / "rods.dump")
+        os.replace(work / "rods.dump", particles)
     elif multisphere:
         stats = convert_multisphere_rods(work / "contacts.native", particles,
                                          work / "contacts.dump", work / "rods.dump",
@@ -604,7 +770,7 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     steps = _last_step(outdir / "thermo.dat")
     n = _count_atoms(outdir / "particles.dump")
     settled = {}
-    if case["protocol"]["name"] == "deposit":
+    if case["protocol"]["name"] == "deposit" or settles(engine, case):
         settled = {"settled": "rodpack: settled at step" in text}
     return {**settled, "engine_version": engine_version(engine, text), "command": cmd, "ranks": ranks,
             "wall_seconds": wall, "steps": steps,
@@ -1319,3 +1485,35 @@ def convert_liggghts_tap(work: Path, case: dict) -> dict:
     io.finalize(out_contacts)
     io.finalize(out_particles)
     return {"dropped": dropped}
+
+
+def liggghts_latest_restart(work: Path) -> Path | None:
+    """The newest complete restart file (``restart.<step>``) of an interrupted LIGGGHTS
+    tapping run in ``work``, or None: each candidate, newest first, is read back by
+    LIGGGHTS itself (:func:`liggghts_restart_is_complete`), as :func:`latest_restart`
+    does for LAMMPS."""
+    if not work.exists():
+        return None
+    files = sorted((p for p in work.glob("restart.*") if p.name.split(".")[-1].isdigit()),
+                   key=lambda p: int(p.name.split(".")[-1]))
+    for path in reversed(files):
+        if path.stat().st_size > 0 and liggghts_restart_is_complete(path):
+            return path
+    return None
+
+
+def liggghts_restart_is_complete(path: Path) -> bool:
+    """Whether LIGGGHTS reads the restart file ``path`` of the tapping deck (in a child
+    process). A file cut short while being written fails ("Did not assign all atoms");
+    one missing only its last few bytes may still read (measured: 32 of 60,000 bytes)."""
+    exe = shutil.which("liggghts")
+    if exe is None:
+        return False
+    script = path.parent / "restart_check.in"
+    script.write_text("atom_style granular\natom_modify map array\nboundary f f fm\n"
+                      "newton off\ncommunicate single vel yes\nunits si\n"
+                      f"read_restart {path.name}\nprint 'rodpack: restart read'\nquit\n")
+    r = subprocess.run([exe, "-in", script.name, "-log", "none"], cwd=path.parent,
+                       capture_output=True, text=True, errors="replace", timeout=300)
+    script.unlink()
+    return "rodpack: restart read" in r.stdout

@@ -74,7 +74,7 @@ CASES = [
      "protocol: phi_fast and rate_fast go together; give both or neither"),
     (("protocol", "phi_fnial"), 0.7,
      "unknown key 'protocol.phi_fnial'; allowed here: dt, integrator, k_d, name, phi_fast, "
-     "phi_final, phi_init, pressure_final, rate, rate_fast"),
+     "phi_final, phi_init, pressure_final, rate, rate_fast, settle"),
     (("seed",), -1, "seed = -1 is not allowed; use a number >= 0"),
     (("seed",), DROP, "missing key 'seed'"),
     (("output",), {"dump_every": 0}, "output.dump_every = 0 is not allowed; use a number >= 1"),

@@ -7,9 +7,11 @@ import sys
 from pathlib import Path
 
 from analysis.summary import (TIDY_COLUMNS, analyse_compression, analyse_deposit,
-                              analyse_growth, analyse_jammed, analyse_tapping, tidy)
+                              analyse_growth, analyse_jammed, analyse_settled, analyse_tapping,
+                              tidy)
 from pysim.io import atomic_write_text
 from workflows.case import ConfigError, load_case
+from workflows.engines import settles
 
 #: provenance columns copied from run.json into every result row
 PROVENANCE = ("engine_version", "case_hash", "git_revision")
@@ -70,9 +72,15 @@ def main(argv=None) -> int:
     if case["protocol"]["name"] == "growth":
         rows, curves, _thermo = analyse_growth(a.run)
     elif case["protocol"]["name"] == "jammed":
-        rows, curves, _thermo = analyse_jammed(a.run)
+        rows, curves, _thermo = analyse_jammed(a.run,
+                                               energy_target=case["protocol"]["energy_target"])
     elif case["protocol"]["name"] == "tapping":
         rows, curves, _thermo = analyse_tapping(a.run, **tap_plan(case))
+    elif settles(a.engine, case):  # LIGGGHTS rods: a settled bed, not a compression
+        rows, curves, _thermo = analyse_settled(a.run, case["protocol"]["settle"]["bulk"])
+        settled = record.get("settled")
+        rows.append(("settled", float(settled) if settled is not None else float("nan"),
+                     float("nan")))
     elif case["protocol"]["name"] == "deposit":
         rows, curves = analyse_deposit(a.run, **deposit_geometry(case))
         settled = record.get("settled")

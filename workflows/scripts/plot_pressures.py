@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from analysis.io import read_thermo
 from analysis.plots import pressure_by_variant
+from workflows.scripts.plot_study import pressure_curve
 
 
 def main(argv=None) -> int:
@@ -28,8 +28,10 @@ def main(argv=None) -> int:
         obs = pd.read_csv(run / "observables.csv")
         val = dict(zip(obs.observable, obs.value))
         value = obs[a.parameter].iloc[0] if a.parameter in obs.columns else run.parent.parent.name
+        curves = pd.read_csv(run / "curves.csv")
         runs.append({"variant": run.parent.parent.name, "value": value, "engine": run.name,
-                     "seed": run.parent.name, "thermo": read_thermo(run / "thermo.dat"),
+                     "seed": run.parent.name, "thermo": pressure_curve(run, curves),
+                     "points": "bulk" in curves,
                      "phi_j": val.get("phi_j", float("nan"))})
     pressure_by_variant(runs, a.out, p_scale=a.p_scale, parameter=a.parameter or None)
     return 0

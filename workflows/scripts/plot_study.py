@@ -1,6 +1,8 @@
 """Figures of one study variant with all engines overlaid: pressure and contact number
 versus packing fraction, the distribution of contact numbers P(C) in the frame nearest
-to jamming, and phi_J per engine."""
+to jamming, and phi_J per engine. A bed settled under gravity (LIGGGHTS' rods) is drawn
+by the slabs of its profile (p, z and order versus phi along the depth) and P(C) of
+its bulk window."""
 from __future__ import annotations
 
 import argparse
@@ -18,18 +20,47 @@ from analysis.io import RunData, read_thermo
 from analysis.packing import packing_fraction
 
 
-def contacts_at_jamming(run_dir: Path, phi_j: float):
+def contacts_at_jamming(run_dir: Path, phi_j: float, bulk=None):
     """``(phi, P(C) with rattlers, P(C) rattler-free)`` of the frame whose packing
-    fraction is nearest to ``phi_j`` (``None`` without frames or ``phi_j``)."""
+    fraction is nearest to ``phi_j`` (``None`` without frames or ``phi_j``). A settled
+    bed (``bulk`` = its window ``(lo, hi)``, :func:`analysis.summary.analyse_settled`):
+    the last frame, over the particles whose centre lies in the window (rattlers found
+    in the whole bed), at ``phi_j``."""
     if not np.isfinite(phi_j):
         return None
     frames = RunData(run_dir).frames()
     if not frames:
         return None
+    if bulk is not None:
+        frame, contacts = frames[-1]
+        cn = ContactNumber().compute(frame, contacts)
+        inside = (frame.x[:, 2] >= bulk[0]) & (frame.x[:, 2] < bulk[1])
+        from analysis.contacts import contact_counts
+        from analysis.walls import split_wall_contacts
+
+        pp, walls = split_wall_contacts(frame, contacts)
+        a, b = frame.index_of(pp.i), frame.index_of(pp.j)
+        fixed = np.bincount(frame.index_of(walls.i), minlength=frame.n)
+        keep = ~(cn.rattlers[a] | cn.rattlers[b])
+        free = (contact_counts(frame.n, a[keep], b[keep]) + fixed)[inside & ~cn.rattlers]
+        c_all = cn.per_particle[inside]
+        return (float(phi_j), np.bincount(c_all) / max(len(c_all), 1),
+                np.bincount(free) / max(len(free), 1))
     phis = np.array([packing_fraction(f) for f, _ in frames])
     k = int(np.argmin(np.abs(phis - phi_j)))
     cn = ContactNumber().compute(*frames[k])
     return float(phis[k]), cn.distribution, cn.distribution_rattler_free
+
+
+def pressure_curve(run_dir: Path, curves: pd.DataFrame) -> pd.DataFrame:
+    """``phi`` and ``pressure`` to draw as the run's p(phi): the thermo table of a
+    compression; for a bed settled under gravity (curves with a ``bulk`` column,
+    :func:`analysis.summary.analyse_settled`) its slabs inside the bulk window, p(phi)
+    along the gravity gradient (the thermo table of a settling run holds the collapse
+    of the inserted column, not a p(phi))."""
+    if "bulk" in curves:
+        return curves[curves.bulk == 1].sort_values("phi")[["phi", "pressure"]]
+    return read_thermo(run_dir / "thermo.dat")
 
 
 def main(argv=None) -> int:
@@ -54,11 +85,14 @@ def main(argv=None) -> int:
         engine, seed = o.engine.iloc[0], int(o.seed.iloc[0])
         seeds.setdefault(engine, [])
         seeds[engine].append(seed)
-        runs.append({"engine": engine, "seed": seed, "thermo": read_thermo(d / "thermo.dat"),
-                     "curves": pd.read_csv(d / "curves.csv"),
+        curves = pd.read_csv(d / "curves.csv")
+        bulk = (val["bulk_lo"], val["bulk_hi"]) if "bulk_lo" in val else None  # settled bed
+        runs.append({"engine": engine, "seed": seed, "thermo": pressure_curve(d, curves),
+                     "curves": curves[curves.bulk == 1] if bulk else curves,
+                     "points": bulk is not None,
                      "phi_j": val.get("phi_j", float("nan")),
                      "slope": val.get("jamming_slope", float("nan")),
-                     "p_c": contacts_at_jamming(d, val.get("phi_j", float("nan")))})
+                     "p_c": contacts_at_jamming(d, val.get("phi_j", float("nan")), bulk)})
     for r in runs:
         r["seed_index"] = sorted(seeds[r["engine"]]).index(r["seed"])
     if not runs:
