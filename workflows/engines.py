@@ -461,38 +461,8 @@ def convert_settled_rods(native: Path, particles: Path, out_contacts: Path,
     rod id), sphere-sphere contacts (geometry recomputed from the frame, minimum image
     across the periodic x and y) and sphere-floor contacts (:func:`floor_contacts`) merge
     per rod pair and per rod (a rod lying flat on the floor: one merged row)."""
-    from analysis.frame import Contacts
-    from analysis.io import read_particle_frames
-
-    spheres = {f.step: f for f in read_particle_frames(particles)}
-    body, floor = {}, {}
-    for step, _b, _p, cols, table in _iter_dump(particles):
-        c = {name: k for k, name in enumerate(cols)}
-        order = np.argsort(table[:, c["id"]], kind="stable")
-        body[step] = table[order, c["id_multisphere"]].astype(np.int64)
-        floor[step] = floor_contacts(spheres[step], table[order], cols)
-    dropped = 0
-    with open(io.part_path(out_contacts), "w") as fc, open(io.part_path(out_particles), "w") as fp:
-        for step, _box, _cols, table in _iter_local(native):
-            if step not in spheres:
-                raise EngineError(f"{native}: contact frame at step {step} has no particle "
-                                  f"frame in {particles}")
-            fr = spheres[step]
-            ids_i, ids_j = table[:, 6], table[:, 7]
-            n, delta, point = _geometry(fr, ids_i, ids_j)
-            keep = delta > 0
-            dropped += int(np.count_nonzero(~keep))
-            w = floor[step]
-            sph = Contacts(step, np.concatenate([ids_i[keep].astype(np.int64), w.i]),
-                           np.concatenate([ids_j[keep].astype(np.int64), w.j]),
-                           np.concatenate([point[keep], w.point]),
-                           np.concatenate([n[keep], w.normal]),
-                           np.concatenate([delta[keep], w.overlap]),
-                           np.concatenate([table[keep, 9:12], w.force]))
-            _write_glued_frame(fp, fc, fr, sph, body[step])
-    io.finalize(out_contacts)
-    io.finalize(out_particles)
-    return {"dropped": dropped}
+    return _convert_multisphere(native, particles, out_contacts, out_particles,
+                                lambda fr, table, cols, _step: floor_contacts(fr, table, cols))
 # -- end of LIGGGHTS random packings of rods --------------------------------------------------------
 
 
@@ -996,23 +966,42 @@ def convert_multisphere_rods(native: Path, particles: Path, out_contacts: Path,
     (:func:`multisphere_wall_contacts`) merge per rod pair and per rod and wall
     (:func:`analysis.contacts.merge_glued_contacts`).
     """
+    return _convert_multisphere(
+        native, particles, out_contacts, out_particles,
+        lambda fr, table, cols, _step: multisphere_wall_contacts(fr, table, cols, width))
+
+
+def _convert_multisphere(native: Path, particles: Path, out_contacts: Path,
+                         out_particles: Path, wall_rows, steps=None) -> dict:
+    """The conversion shared by LIGGGHTS' multisphere decks: sphere frames become rods
+    (body id ``id_multisphere``), sphere-sphere contacts (geometry recomputed from the
+    frame) and the deck's sphere-wall rows, ``wall_rows(frame, table, columns, step)`` ->
+    :class:`analysis.frame.Contacts` (``table`` the dump rows in ``frame`` order), merge
+    per rod pair and per rod and wall (:func:`_write_glued_frame`). Both dumps must hold
+    the same steps (and ``steps``, when given). Returns ``{"dropped": sphere pairs within
+    the neighbour cutoff but not touching}``."""
     from analysis.frame import Contacts
     from analysis.io import read_particle_frames
 
     spheres = {f.step: f for f in read_particle_frames(particles)}
+    if steps is not None and sorted(spheres) != list(steps):
+        raise EngineError(f"{particles}: frames at steps {sorted(spheres)[:5]}... are not the "
+                          f"planned {len(steps)} frames from step {steps[0]}")
     body, walls = {}, {}
     for step, _b, _p, cols, table in _iter_dump(particles):
         c = {name: k for k, name in enumerate(cols)}
         order = np.argsort(table[:, c["id"]], kind="stable")
         body[step] = table[order, c["id_multisphere"]].astype(np.int64)
-        walls[step] = multisphere_wall_contacts(spheres[step], table[order], cols, width)
+        walls[step] = wall_rows(spheres[step], table[order], cols, step)
+    local = {step: table for step, _box, _cols, table in _iter_local(native)}
+    odd = sorted(set(local) ^ set(spheres))
+    if odd:
+        raise EngineError(f"{native} and {particles}: frames at steps {odd[:5]} are in one "
+                          "file only")
     dropped = 0
     with open(io.part_path(out_contacts), "w") as fc, open(io.part_path(out_particles), "w") as fp:
-        for step, _box, _cols, table in _iter_local(native):
-            if step not in spheres:
-                raise EngineError(f"{native}: contact frame at step {step} has no particle "
-                                  f"frame in {particles}")
-            fr = spheres[step]
+        for step in sorted(spheres):
+            table, fr = local[step], spheres[step]
             ids_i, ids_j = table[:, 6], table[:, 7]
             n, delta, point = _geometry(fr, ids_i, ids_j)
             keep = delta > 0
@@ -1443,48 +1432,16 @@ def convert_liggghts_tap(work: Path, case: dict) -> dict:
     merge per rod pair and per rod and wall. Raises :class:`EngineError` when the frames
     are not those of the plan (:func:`pysim.protocols.tapping.plan`).
     """
-    from analysis.frame import Contacts
-    from analysis.io import read_particle_frames
     from pysim.protocols.tapping import plan
 
     tp = plan(case["protocol"], case["gravity"])
     rc = 0.5 * case["container"]["diameter"]
-    particles, native = work / "particles.dump", work / "contacts.native"
-    spheres = {f.step: f for f in read_particle_frames(particles)}
-    if sorted(spheres) != [int(s) for s in tp.frame_steps]:
-        raise EngineError(f"{particles}: frames at steps {sorted(spheres)[:5]}... do not follow "
-                          f"the tapping plan ({len(tp.frame_steps)} frames from step "
-                          f"{tp.start}); log: {work / 'screen.txt'}")
-    body, walls = {}, {}
-    for step, _b, _p, cols, table in _iter_dump(particles):
-        c = {name: k for k, name in enumerate(cols)}
-        order = np.argsort(table[:, c["id"]], kind="stable")
-        body[step] = table[order, c["id_multisphere"]].astype(np.int64)
-        walls[step] = liggghts_tap_wall_contacts(spheres[step], table[order], cols, rc,
-                                                 float(tp.base_height(step)))
-    local = {step: table for step, _box, _cols, table in _iter_local(native)}
-    dropped = 0
-    out_contacts, out_particles = work / "contacts.dump", work / "rods.dump"
-    with open(io.part_path(out_contacts), "w") as fc, open(io.part_path(out_particles), "w") as fp:
-        for step in sorted(spheres):
-            if step not in local:
-                raise EngineError(f"{native}: no contact frame at step {step}")
-            table, fr = local[step], spheres[step]
-            ids_i, ids_j = table[:, 6], table[:, 7]
-            n, delta, point = _geometry(fr, ids_i, ids_j)
-            keep = delta > 0
-            dropped += int(np.count_nonzero(~keep))
-            w = walls[step]
-            sph = Contacts(step, np.concatenate([ids_i[keep].astype(np.int64), w.i]),
-                           np.concatenate([ids_j[keep].astype(np.int64), w.j]),
-                           np.concatenate([point[keep], w.point]),
-                           np.concatenate([n[keep], w.normal]),
-                           np.concatenate([delta[keep], w.overlap]),
-                           np.concatenate([table[keep, 9:12], w.force]))
-            _write_glued_frame(fp, fc, fr, sph, body[step])
-    io.finalize(out_contacts)
-    io.finalize(out_particles)
-    return {"dropped": dropped}
+    return _convert_multisphere(
+        work / "contacts.native", work / "particles.dump", work / "contacts.dump",
+        work / "rods.dump",
+        lambda fr, table, cols, step: liggghts_tap_wall_contacts(
+            fr, table, cols, rc, float(tp.base_height(step))),
+        steps=[int(x) for x in tp.frame_steps])
 
 
 def liggghts_latest_restart(work: Path) -> Path | None:
