@@ -384,26 +384,46 @@ def settled_window(frame, margins, floor: float = 0.0) -> tuple[float, float, fl
     return lo, hi, top
 
 
-def _settled_layer(frame, pairs, fixed, lo: float, hi: float, c_min: int) -> dict:
-    """Observables of the particles whose centre lies in ``[lo, hi)`` (one row); rattlers
-    are removed inside the layer only, its surroundings held fixed (see
-    :func:`analyse_settled`). ``pairs`` ``(a, b, contacts)``: row indices of the
-    particle-particle contacts and the whole table; ``fixed`` (N,) wall contacts."""
+def settled_contact_numbers(frame, pairs, fixed, lo: float, hi: float, c_min: int):
+    """Contact numbers of the particles whose centre lies in the layer ``[lo, hi)`` of a
+    settled bed, rattlers removed inside the layer only: contacts with particles outside
+    it count like wall contacts and are never removed (see :func:`analyse_settled`).
+    ``pairs`` ``(a, b, contacts)``: row indices of the particle-particle contacts and the
+    whole table; ``fixed`` (N,) wall contacts. Returns ``(inside, rattlers, c_all,
+    c_free)``: masks (N,), and per particle every contact and the rattler-free ones."""
     from analysis.contacts import contact_counts, remove_rattlers
-    from analysis.packing import slab_packing_fraction
-    from analysis.stress import StressProfile
 
-    a, b, contacts = pairs
+    a, b, _contacts = pairs
     v = frame.vertical
     inside = (frame.x[:, v] >= lo) & (frame.x[:, v] < hi)
     both = inside[a] & inside[b]
-    # contacts with particles outside the layer count like wall contacts: never removed
     held = (fixed + np.bincount(a[inside[a] & ~inside[b]], minlength=frame.n)
             + np.bincount(b[inside[b] & ~inside[a]], minlength=frame.n))
     ratt = remove_rattlers(frame.n, a[both], b[both], c_min, held) & inside
     keep = both & ~(ratt[a] | ratt[b])
     c_all = contact_counts(frame.n, a, b) + fixed
     c_free = contact_counts(frame.n, a[keep], b[keep]) + held
+    return inside, ratt, c_all, c_free
+
+
+def settled_pairs(frame, contacts):
+    """``(pairs, fixed)`` of :func:`settled_contact_numbers` from a frame's contact table
+    (wall rows split off)."""
+    from analysis.walls import split_wall_contacts
+
+    pp, walls = split_wall_contacts(frame, contacts)
+    pairs = (frame.index_of(pp.i), frame.index_of(pp.j), contacts)
+    return pairs, np.bincount(frame.index_of(walls.i), minlength=frame.n)
+
+
+def _settled_layer(frame, pairs, fixed, lo: float, hi: float, c_min: int) -> dict:
+    """Observables of the particles whose centre lies in ``[lo, hi)`` (one row); rattlers
+    are removed inside the layer only (:func:`settled_contact_numbers`)."""
+    from analysis.packing import slab_packing_fraction
+    from analysis.stress import StressProfile
+
+    contacts = pairs[2]
+    inside, ratt, c_all, c_free = settled_contact_numbers(frame, pairs, fixed, lo, hi, c_min)
     backbone = inside & ~ratt
     order = NematicOrder().compute(frame.subset(inside)) if inside.any() else None
     stress = StressProfile(edges=[lo, hi]).compute(frame, contacts)
@@ -448,7 +468,6 @@ def analyse_settled(run_dir, margins, floor: float = 0.0, c_min: int | None = No
     that ``phi``, ``pressure`` and ``z`` over the slabs show the gravity gradient.
     """
     from analysis.contacts import default_c_min
-    from analysis.walls import split_wall_contacts
 
     run = RunData(run_dir)
     frames = run.frames()
@@ -457,9 +476,7 @@ def analyse_settled(run_dir, margins, floor: float = 0.0, c_min: int | None = No
     frame, contacts = frames[-1]
     lo, hi, top = settled_window(frame, margins, floor)
     ell = float(np.max(frame.length + 2.0 * frame.radius))
-    pp, walls = split_wall_contacts(frame, contacts)
-    pairs = (frame.index_of(pp.i), frame.index_of(pp.j), contacts)
-    fixed = np.bincount(frame.index_of(walls.i), minlength=frame.n)
+    pairs, fixed = settled_pairs(frame, contacts)
     c_min = default_c_min(frame) if c_min is None else c_min
     bulk = _settled_layer(frame, pairs, fixed, lo, hi, c_min)
     k = max(int(np.floor((hi - lo) / ell)), 1)

@@ -24,26 +24,23 @@ def contacts_at_jamming(run_dir: Path, phi_j: float, bulk=None):
     """``(phi, P(C) with rattlers, P(C) rattler-free)`` of the frame whose packing
     fraction is nearest to ``phi_j`` (``None`` without frames or ``phi_j``). A settled
     bed (``bulk`` = its window ``(lo, hi)``, :func:`analysis.summary.analyse_settled`):
-    the last frame, over the particles whose centre lies in the window (rattlers found
-    in the whole bed), at ``phi_j``."""
+    the last frame, over the particles whose centre lies in the window, rattlers removed
+    inside the window as the analysis does, at ``phi_j``."""
     if not np.isfinite(phi_j):
         return None
     frames = RunData(run_dir).frames()
     if not frames:
         return None
     if bulk is not None:
-        frame, contacts = frames[-1]
-        cn = ContactNumber().compute(frame, contacts)
-        inside = (frame.x[:, 2] >= bulk[0]) & (frame.x[:, 2] < bulk[1])
-        from analysis.contacts import contact_counts
-        from analysis.walls import split_wall_contacts
+        from analysis.contacts import default_c_min
+        from analysis.summary import settled_contact_numbers, settled_pairs
 
-        pp, walls = split_wall_contacts(frame, contacts)
-        a, b = frame.index_of(pp.i), frame.index_of(pp.j)
-        fixed = np.bincount(frame.index_of(walls.i), minlength=frame.n)
-        keep = ~(cn.rattlers[a] | cn.rattlers[b])
-        free = (contact_counts(frame.n, a[keep], b[keep]) + fixed)[inside & ~cn.rattlers]
-        c_all = cn.per_particle[inside]
+        frame, contacts = frames[-1]
+        pairs, fixed = settled_pairs(frame, contacts)
+        inside, ratt, counts, counts_free = settled_contact_numbers(
+            frame, pairs, fixed, bulk[0], bulk[1], default_c_min(frame))
+        c_all = counts[inside]
+        free = counts_free[inside & ~ratt]
         return (float(phi_j), np.bincount(c_all) / max(len(c_all), 1),
                 np.bincount(free) / max(len(free), 1))
     phis = np.array([packing_fraction(f) for f, _ in frames])
