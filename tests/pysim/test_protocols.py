@@ -95,7 +95,7 @@ def test_jammed_disks_by_box_bisection(tmp_path):
         "output": {"thermo_every": 500, "dump_every": 100000}, "seed": 5})
     res = json.loads((out / "jammed.json").read_text())
     assert res["converged"] and 5e-16 <= res["energy_density"] <= 2e-15
-    assert res["fire_balanced"]
+    assert res["force_balanced"]
     assert 0.80 < res["phi_j"] < 0.87
     assert res["force_residual_max"] < 1e-3  # disks: true force balance
     f, c = RunData(out).frames()[-1]
@@ -105,7 +105,7 @@ def test_jammed_disks_by_box_bisection(tmp_path):
 
 def test_jammed_reports_unbalanced_forces_as_not_converged(tmp_path):
     """With far too few FIRE iterations per relaxation the forces never balance: the run
-    says so (``fire_balanced`` false) and does not call the state converged, whatever
+    says so (``force_balanced`` false) and does not call the state converged, whatever
     its energy."""
     import json
 
@@ -117,7 +117,7 @@ def test_jammed_reports_unbalanced_forces_as_not_converged(tmp_path):
                      "max_relax": 100, "max_bisections": 8},
         "output": {"thermo_every": 500, "dump_every": 100000}, "seed": 5})
     res = json.loads((out / "jammed.json").read_text())
-    assert not res["fire_balanced"]
+    assert not res["force_balanced"]
     assert not res["converged"]
     assert res["force_residual_max"] > 1e-3
 
@@ -129,12 +129,17 @@ def test_converged_needs_the_energy_and_balanced_forces():
     (residuals 7 % and 85 %) and any state off the energy target are not converged."""
     from pysim.protocols.jammed import BALANCE_TOL, is_converged
 
-    good = {"energy_density": 8.0e-16, "fire_balanced": False, "force_residual_max": 2.2e-4,
+    good = {"energy_density": 8.0e-16, "force_balanced": False, "force_residual_max": 2.2e-4,
             "torque_residual_max": 1.5e-5}
     assert is_converged(good, 1e-15)
-    assert is_converged({**good, "fire_balanced": True, "force_residual_max": 0.5}, 1e-15)
+    assert is_converged({**good, "force_balanced": True, "force_residual_max": 0.5}, 1e-15)
     assert not is_converged({**good, "force_residual_max": 0.85}, 1e-15)
     assert not is_converged({**good, "torque_residual_max": 2 * BALANCE_TOL}, 1e-15)
     assert not is_converged({**good, "force_residual_max": float("nan")}, 1e-15)
-    assert not is_converged({**good, "energy_density": 2.0e-12, "fire_balanced": True}, 1e-15)
+    assert not is_converged({**good, "energy_density": 2.0e-12, "force_balanced": True}, 1e-15)
     assert not is_converged({**good, "energy_density": 4.0e-16}, 1e-15)
+    # records written before L-BFGS joined the relaxation call the flag fire_balanced
+    old = {"energy_density": 8.0e-16, "fire_balanced": True, "force_residual_max": 0.5,
+           "torque_residual_max": 0.5}
+    assert is_converged(old, 1e-15)
+    assert not is_converged({**old, "fire_balanced": False}, 1e-15)

@@ -1,0 +1,73 @@
+"""L-BFGS energy minimisation (:func:`pysim.minimize.lbfgs`): it balances every force
+and torque of overlapping rods in 2-D and 3-D, lowers the energy, leaves a state that
+FIRE accepts at once, and refuses what has no energy to minimise."""
+import numpy as np
+import pytest
+
+from pysim import walls
+from pysim.initial import random_spherocylinders
+from pysim.minimize import lbfgs
+from pysim.simulation import ContactModel, Simulation
+from pysim.state import State
+
+
+def overlapping_rods(dim, n, alpha, phi, seed, spine_contact):
+    """Rods placed at random without overlap (random sequential addition at half of
+    ``phi``), then the periodic box shrunk affinely to ``phi``, well above jamming: they
+    overlap. Bidisperse radii 0.5 and 0.7, harmonic law with k_n = 1."""
+    rng = np.random.default_rng(seed)
+    r = rng.choice([0.5, 0.7], n)
+    x, u, r, length, box = random_spherocylinders(r, 2 * alpha * r, phi / 2, seed, dim)
+    if dim == 2:
+        box[2] = 1.0
+    st = State.create(x, r, length, box, axis=u, dimension=dim,
+                      periodic=(True, True, dim == 3))
+    model = ContactModel("harmonic", 1.0, spine_contact=spine_contact)
+    sim = Simulation(st, model, dt=0.01, check_dt=False, max_overlap=1.0)
+    sim.rescale_box(0.5 ** (1 / dim))
+    return sim
+
+
+@pytest.mark.parametrize("dim, spine_contact", [(2, "end_bonds"), (3, "closest")])
+def test_lbfgs_balances_overlapping_rods(dim, spine_contact):
+    sim = overlapping_rods(dim, 40, 1.0, 0.95 if dim == 2 else 0.7, 3, spine_contact)
+    assert sim.state.packing_fraction() == pytest.approx(0.95 if dim == 2 else 0.7)
+    sim.compute_forces()
+    e0 = sim.thermo().pe
+    assert np.abs(sim.f).max() > 1e-2  # far from balanced
+    # the energy is of order 1: its rounding (1e-16) bounds what a line search on it can
+    # resolve to forces of some sqrt(1e-16 k_n U) = 1e-8
+    it, fmax, tmax = lbfgs(sim, f_tol=1e-7, max_iter=20_000)
+    assert fmax < 1e-7 and tmax < 1e-7, (it, fmax, tmax)
+    # the returned residuals are those of the final state, and so is the energy
+    sim.compute_forces()
+    assert np.linalg.norm(sim.f, axis=1).max() == pytest.approx(fmax, abs=1e-15)
+    assert 0 < sim.thermo().pe < 0.5 * e0  # still overlapping (jammed), much relaxed
+    # spines stay unit vectors, in the plane in 2-D, and the quaternions follow them
+    s = sim.state
+    assert np.allclose(np.linalg.norm(s.u, axis=1), 1.0)
+    if dim == 2:
+        assert np.all(s.u[:, 2] == 0) and np.all(s.x[:, 2] == 0)
+    assert np.all((s.x >= 0) & (s.x <= s.box))
+    # FIRE, given the same tolerance, finds nothing left to do
+    it_fire, f_fire, t_fire = sim.minimize(f_tol=1e-7, max_iter=10)
+    assert it_fire == 0 and f_fire < 1e-7 and t_fire < 1e-7
+
+
+def test_lbfgs_refuses_what_has_no_energy():
+    sim = overlapping_rods(2, 40, 1.0, 0.9, 1, "closest")
+    st = sim.state
+    fric = Simulation(st, ContactModel("hooke", 1.0, k_t=1.0, mu=0.5), dt=0.01,
+                      check_dt=False, max_overlap=1.0)
+    with pytest.raises(ValueError, match=r"friction \(mu = 0.5\)"):
+        lbfgs(fric, 1e-10)
+    grav = Simulation(st, ContactModel("harmonic", 1.0), dt=0.01, gravity=(0, -1, 0),
+                      check_dt=False, max_overlap=1.0)
+    with pytest.raises(ValueError, match="walls or gravity"):
+        lbfgs(grav, 1e-10)
+    wall = Simulation(st, ContactModel("harmonic", 1.0), dt=0.01, check_dt=False,
+                      max_overlap=1.0, planes=[walls.plane((0, 1, 0), (0, 0, 0))])
+    with pytest.raises(ValueError, match="walls or gravity"):
+        lbfgs(wall, 1e-10)
+    with pytest.raises(ValueError, match="f_tol = 0"):
+        lbfgs(sim, 0.0)
