@@ -163,7 +163,8 @@ def message_figure(out, message: str):
 
 def trends(summary, parameter, observables, out, title=None, references=None):
     """Observables versus a case parameter (e.g. ``alpha``), one panel each, engines
-    overlaid: mean and standard deviation over seeds. ``references`` maps an observable
+    overlaid: mean and standard deviation over seeds (a series ``'<engine> <protocol>'``,
+    runs of another protocol, in the engine's colour with open squares). ``references`` maps an observable
     to ``[(label, x (array), y (array))]`` curves drawn in black (theory)."""
     have = summary[np.isfinite(summary.value.astype(float))]
     obs = [o for o in observables if o in set(have.observable)]
@@ -175,8 +176,13 @@ def trends(summary, parameter, observables, out, title=None, references=None):
         s = summary[summary.observable == o]
         for engine, g in s.groupby("engine"):
             st = g.groupby(parameter)["value"].agg(["mean", "std"]).reset_index()
-            ax.errorbar(st[parameter], st["mean"], yerr=st["std"].fillna(0), fmt="o-",
-                        capsize=3, color=ENGINE_COLORS.get(engine, "k"), label=engine, ms=4)
+            # a series named '<engine> <protocol>' (another protocol): the engine's colour,
+            # open squares, dashed
+            base = engine.split()[0]
+            other = base != engine
+            ax.errorbar(st[parameter], st["mean"], yerr=st["std"].fillna(0),
+                        fmt="s--" if other else "o-", mfc="none" if other else None,
+                        capsize=3, color=ENGINE_COLORS.get(base, "k"), label=engine, ms=4)
         lo, hi = s[parameter].min(), s[parameter].max()
         for label, x, y in (references or {}).get(o, []):
             keep = (np.asarray(x) >= lo) & (np.asarray(x) <= hi)  # theory only where data are

@@ -33,6 +33,20 @@ def references(parameter: str, dimension: int) -> dict:
             "phi_j": [("random contact eq., <C> = 10", a[thick], phi_rce)]}
 
 
+def label_protocols(df: pd.DataFrame) -> pd.DataFrame:
+    """Runs of another protocol than the study's (LIGGGHTS' rods settled under gravity,
+    with an observable ``settled``) get their own series, ``<engine> settled``, so that
+    no line joins a compression's point to a settled bed's."""
+    settled = df[(df.observable == "settled") & (df.value == 1)][["case", "engine"]]
+    if settled.empty:
+        return df
+    df = df.copy()
+    key = pd.MultiIndex.from_frame(df[["case", "engine"]])
+    mark = key.isin(pd.MultiIndex.from_frame(settled))
+    df.loc[mark, "engine"] = df.loc[mark, "engine"] + " settled"
+    return df
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--summary", required=True, type=Path)
@@ -43,6 +57,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     df = pd.read_csv(a.summary)
     df = df[df.study == a.study]
+    df = label_protocols(df)
     plots.trends(df, a.parameter, OBSERVABLES, a.out, title=a.study,
                  references=references(a.parameter, a.dimension))
     return 0
