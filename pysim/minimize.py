@@ -54,7 +54,7 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
 
     def energy(z):
         s.x[:, :dim] = z[:nx].reshape(n, dim)
-        s.x[:, :] = np.where(s.periodic, np.mod(s.x, s.box), s.x)
+        itg.wrap(s.x, s.box, s.periodic)
         w = z[nx:].reshape(len(rods), dim) / scale
         norm = np.linalg.norm(w, axis=1)
         if len(rods):

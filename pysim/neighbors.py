@@ -270,26 +270,35 @@ def motion_bound(x, x_ref, u, u_ref, half, box, box_ref, periodic, h_ref, growth
         sigma = min(sigma, a)
         eps = max(eps, abs(1.0 - a))
     hscale = max(1.0, 1.0 / growth) if growth > 0 else 1.0
+    s0, s1, s2 = scale[0], scale[1], scale[2]
+    b0, b1, b2 = box[0], box[1], box[2]
+    p0, p1, p2 = periodic[0], periodic[1], periodic[2]
     nb = (n + BLOCK - 1) // BLOCK
     dmax = np.zeros(nb)
     for b in prange(nb):
-        m = 0.0
+        m = 0.0  # rods: translation plus the end's swing
+        m2 = 0.0  # spheres: the squared translation (one square root per block)
         for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
-            d2 = 0.0
-            for k in range(3):
-                dk = x[i, k] - x_ref[i, k] * scale[k]
-                if periodic[k]:
-                    dk -= box[k] * np.floor(dk / box[k] + 0.5)
-                d2 += dk * dk
-            dl = np.sqrt(d2)
+            d0 = x[i, 0] - x_ref[i, 0] * s0
+            d1 = x[i, 1] - x_ref[i, 1] * s1
+            d2 = x[i, 2] - x_ref[i, 2] * s2
+            # minimum image, only where needed (the same value: within half a box the
+            # floor is 0)
+            if p0 and abs(d0) > 0.5 * b0:
+                d0 -= b0 * np.floor(d0 / b0 + 0.5)
+            if p1 and abs(d1) > 0.5 * b1:
+                d1 -= b1 * np.floor(d1 / b1 + 0.5)
+            if p2 and abs(d2) > 0.5 * b2:
+                d2 -= b2 * np.floor(d2 / b2 + 0.5)
+            dd = d0 * d0 + d1 * d1 + d2 * d2
             if half[i] > 0.0:
                 e0 = u[i, 0] - u_ref[i, 0]
                 e1 = u[i, 1] - u_ref[i, 1]
                 e2 = u[i, 2] - u_ref[i, 2]
-                dl += half[i] * hscale * np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
-            if dl > m:
-                m = dl
-        dmax[b] = m
+                m = max(m, np.sqrt(dd) + half[i] * hscale * np.sqrt(e0 * e0 + e1 * e1 + e2 * e2))
+            else:
+                m2 = max(m2, dd)
+        dmax[b] = max(m, np.sqrt(m2))
     worst = 0.0
     for b in range(nb):
         if dmax[b] > worst:
