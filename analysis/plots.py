@@ -164,8 +164,9 @@ def message_figure(out, message: str):
 def trends(summary, parameter, observables, out, title=None, references=None):
     """Observables versus a case parameter (e.g. ``alpha``), one panel each, engines
     overlaid: mean and standard deviation over seeds (a series ``'<engine> <protocol>'``,
-    runs of another protocol, in the engine's colour with open squares). ``references`` maps an observable
-    to ``[(label, x (array), y (array))]`` curves drawn in black (theory)."""
+    runs of another protocol, in the engine's colour with open squares). ``references``
+    maps an observable to ``[(label, x (array), y (array))]`` curves drawn in black
+    (theory)."""
     have = summary[np.isfinite(summary.value.astype(float))]
     obs = [o for o in observables if o in set(have.observable)]
     if not obs or parameter not in summary.columns:

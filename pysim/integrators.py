@@ -338,7 +338,9 @@ def _half_and_half(x, v, q, u, omega, f, torque, mass, inertia, radius, half, r_
                    periodic, h, dt, dim2, scale, deform, sc, sc3, sc5):
     """:func:`_second_half` of one step and :func:`_first_half` of the next in one pass
     over the particles: the same operations in the same order per particle (the same
-    bits), one sweep of the arrays instead of two."""
+    bits), one sweep of the arrays instead of two (10^4 spheres, one thread: 0.16 ms
+    against 0.22). Its drift repeats :func:`_first_half`'s on purpose: a flag in one
+    kernel choosing whether the second half runs first cost the whole gain (0.22 ms)."""
     s0, s1, s2 = scale[0], scale[1], scale[2]
     b0, b1, b2 = box[0], box[1], box[2]
     p0, p1, p2 = periodic[0], periodic[1], periodic[2]

@@ -27,8 +27,8 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
     torque is below ``f_tol`` in magnitude (the rule of FIRE), or ``max_iter`` iterations,
     or until L-BFGS can make no further progress: its line search compares energies, so
     it cannot resolve forces much below ``sqrt(eps k_n U)`` (``eps`` = 2.2e-16; 1e-12 for
-    a packing at ``U`` = 1e-8, where FIRE, which uses forces alone, goes on). Only pair contacts without friction,
-    walls or body forces have an energy to minimise. Velocities are zeroed. Returns
+    a packing at ``U`` = 1e-8, where FIRE, which uses forces alone, goes on). Only pair
+    contacts without friction, walls or body forces have an energy to minimise. Velocities are zeroed. Returns
     ``(iterations, max |F|, max |tau|)`` of the final state, whose forces ``sim.f``,
     ``sim.torque`` and energy are up to date."""
     s = sim.state

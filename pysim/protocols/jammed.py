@@ -56,11 +56,11 @@ def _energy_density(sim: Simulation, d_min: float) -> float:
 
 #: stop bisecting when the bracket on phi is this narrow
 PHI_TOL = 1e-7
-#: a packing is force-balanced when the minimisers reached ``force_tol`` or when every residual force
-#: and torque is below this fraction of the mean contact force and torque: at the target
-#: energy the absolute ``force_tol`` (1e-13 k_n / D) is some 4e-6 of the mean contact force,
-#: which FIRE does not always reach for rods, while a state left with 7 % residuals (the
-#: false jammed state that stalled the bisection) is far above this
+#: a packing is force-balanced when the minimisers reached ``force_tol`` or when every
+#: residual force and torque is below this fraction of the mean contact force and torque:
+#: at the target energy the absolute ``force_tol`` (1e-13 k_n / D) is some 4e-6 of the mean
+#: contact force, which FIRE does not always reach for rods, while a state left with 7 %
+#: residuals (the false jammed state that stalled the bisection) is far above this
 BALANCE_TOL = 1e-3
 #: FIRE runs of ``max_relax`` iterations at most per relaxation: a packing whose forces
 #: are not yet balanced is relaxed on, since with energy left it may still be sliding
