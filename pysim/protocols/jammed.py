@@ -22,14 +22,14 @@
 The final packing is the mechanically stable state: its frame is the last of
 ``particles.dump``/``contacts.dump`` and ``jammed.json`` records ``phi_j``, ``U/L^d``,
 whether the minimisers balanced its forces to ``force_tol`` (``force_balanced``), the
-number of bisections, the
-residual forces and torques relative to the mean contact force and torque, and
-``converged`` (:func:`is_converged`: the energy on target and the forces balanced, by
-``force_tol`` or to :data:`BALANCE_TOL` of the mean contact force). With the
-closest-point law these residuals stay of the order of the contact forces for rods: the law has a kink at parallel side-by-side contacts, where
-FIRE stalls; use ``contact.spine_contact: end_bonds`` (:func:`pysim.contacts.end_bond`),
-whose energy is smooth there, for mechanically stable rod packings. Energies are in
-units of ``k_n`` and lengths in units of the smallest diameter.
+number of bisections, the residual forces and torques relative to the mean contact force
+and torque, and ``converged`` (:func:`is_converged`: the energy on target and the forces
+balanced, by ``force_tol`` or to :data:`BALANCE_TOL` of the mean contact force). With
+the closest-point law these residuals stay of the order of the contact forces for rods:
+the law has a kink at parallel side-by-side contacts, where FIRE stalls; use
+``contact.spine_contact: end_bonds`` (:func:`pysim.contacts.end_bond`), whose energy is
+smooth there, for mechanically stable rod packings. Energies are in units of ``k_n`` and
+lengths in units of the smallest diameter.
 """
 from __future__ import annotations
 
@@ -37,9 +37,8 @@ import json
 import time
 
 import numpy as np
-from tqdm import tqdm
-
 from threadpoolctl import threadpool_limits
+from tqdm import tqdm
 
 from pysim import io
 from pysim.minimize import lbfgs
@@ -69,7 +68,7 @@ RELAX_ROUNDS = 5
 #: L-BFGS iterations per round are ``max_relax`` over this: FIRE stalls on the
 #: ill-conditioned landscape near jamming (alpha 3, N = 1024: residual force 5 % of the
 #: mean contact force after 200 000 iterations), where 3000 L-BFGS iterations (3 s on one
-#: core) bring it to 0.1 %
+#: core) bring it to 0.1-0.2 %
 LBFGS_SHARE = 10
 
 
