@@ -28,9 +28,9 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
     or until L-BFGS can make no further progress: its line search compares energies, so
     it cannot resolve forces much below ``sqrt(eps k_n U)`` (``eps`` = 2.2e-16; 1e-12 for
     a packing at ``U`` = 1e-8, where FIRE, which uses forces alone, goes on). Only pair
-    contacts without friction, walls or body forces have an energy to minimise. Velocities are zeroed. Returns
-    ``(iterations, max |F|, max |tau|)`` of the final state, whose forces ``sim.f``,
-    ``sim.torque`` and energy are up to date."""
+    contacts without friction, walls or body forces have an energy to minimise.
+    Velocities are zeroed. Returns ``(iterations, max |F|, max |tau|)`` of the final state,
+    whose forces ``sim.f``, ``sim.torque`` and energy are up to date."""
     s = sim.state
     if sim.model.friction or sim.model.f_coh > 0:
         raise ValueError(f"L-BFGS minimises the elastic energy: friction (mu = {sim.model.mu}) "
@@ -60,7 +60,6 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
         if len(rods):
             s.u[rods, :dim] = w / norm[:, None]
             s.u[rods, dim:] = 0.0  # 2-D: spines exactly in the plane
-            s.q[rods] = quaternions_from_axes(s.u[rods])
         sim._set_pairs(itg.maybe_rebuild(s.x, s.u, s.box, s.periodic, sim.r_int, sim.half,
                                          sim.sys, *sim._pairs(), sim.x_ref, sim.u_ref,
                                          sim.box_ref)[:7])
@@ -93,6 +92,8 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
             iterations = int(res.nit)
             at(res.x)
     finally:
+        if len(rods):  # forces need the spines only; the quaternions follow them once
+            s.q[rods] = quaternions_from_axes(s.u[rods])
         sim.sys[list(free)] = saved
         s.v[:] = 0.0
         s.omega[:] = 0.0

@@ -7,6 +7,7 @@ import pytest
 from pysim import walls
 from pysim.initial import random_spherocylinders
 from pysim.minimize import lbfgs
+from pysim.rotation import axes
 from pysim.simulation import ContactModel, Simulation
 from pysim.state import State
 
@@ -46,6 +47,9 @@ def test_lbfgs_balances_overlapping_rods(dim, spine_contact):
     # spines stay unit vectors, in the plane in 2-D, and the quaternions follow them
     s = sim.state
     assert np.allclose(np.linalg.norm(s.u, axis=1), 1.0)
+    u_of_q = np.empty_like(s.u)
+    axes(s.q, u_of_q)
+    np.testing.assert_allclose(u_of_q, s.u, atol=1e-12)
     if dim == 2:
         assert np.all(s.u[:, 2] == 0) and np.all(s.x[:, 2] == 0)
     assert np.all((s.x >= 0) & (s.x <= s.box))
