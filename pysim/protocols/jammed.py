@@ -8,7 +8,8 @@
 2. **Bisect the box size**: between the last unjammed packing fraction and the first
    jammed one, expand the box affinely from the jammed packing to the middle, relax,
    and move the bracket, until ``U/L^d`` lies within a factor 2 of ``energy_target``,
-   or the bracket is narrower than 1e-7, or ``max_bisections`` is reached. Each
+   or the bracket is narrower than 1e-7 (opened again below the packing when that
+   still holds more than :data:`REOPEN_ENERGY`), or ``max_bisections`` is reached. Each
    relaxation runs FIRE and then, while forces are unbalanced, L-BFGS
    (:func:`pysim.minimize.lbfgs`), in up to :data:`RELAX_ROUNDS` rounds of ``max_relax``
    FIRE iterations: a packing left with unbalanced forces and some energy may still be
@@ -55,6 +56,13 @@ def _energy_density(sim: Simulation, d_min: float) -> float:
 
 #: stop bisecting when the bracket on phi is this narrow
 PHI_TOL = 1e-7
+#: a bracket that closes on a packing with more energy than this is opened again below
+#: it: with the harmonic law ``U/L^d`` is about ``(phi - phi_J)^2``, so such a packing is
+#: still ``10 PHI_TOL`` or more above its own jamming point, and the lower bound it closed
+#: on came from another packing (quick profile, alpha 0.12 seed 1: closed at U/L^2 =
+#: 8.8e-6 because expanding the first jammed packing by 4e-3 unjammed it, while the
+#: packing reached step by step from there stays jammed 1e-3 below the bound)
+REOPEN_ENERGY = (10 * PHI_TOL) ** 2
 #: a packing is force-balanced when the minimisers reached ``force_tol`` or when every
 #: residual force and torque is below this fraction of the mean contact force and torque:
 #: at the target energy the absolute ``force_tol`` (1e-13 k_n / D) is some 4e-6 of the mean
@@ -209,10 +217,18 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
         while drv["phase"] == "bisect":
             # sim holds the jammed packing at phi_hi; bisect from it towards phi_lo
             e = _energy_density(sim, d_min)
-            if (target / 2 <= e <= 2 * target or drv["bisections"] >= p["max_bisections"]
-                    or drv["hi"] - (drv["lo"] or 0.0) < PHI_TOL):
+            if target / 2 <= e <= 2 * target or drv["bisections"] >= p["max_bisections"]:
                 drv["phase"] = "done"
                 break
+            if drv["lo"] is not None and drv["hi"] - drv["lo"] < PHI_TOL:
+                if e <= REOPEN_ENERGY:
+                    drv["phase"] = "done"  # an energy jump within the bracket: no better
+                    break
+                # closed far above the target: the lower bound came from an expansion of
+                # an earlier, denser packing that unjammed, while the packing reached
+                # step by step is still jammed below it; open the bracket again below it
+                drv["lo"] = None
+                drv["reopened"] = drv.get("reopened", 0) + 1
             lo = drv["lo"] if drv["lo"] is not None else 0.9 * drv["hi"]
             goal = 0.5 * (lo + drv["hi"])
             trial = _copy(sim)
@@ -238,7 +254,8 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     e = _energy_density(sim, d_min)
     balanced = bool(drv.get("balanced", False))
     result = {"phi_j": s.packing_fraction(), "energy_density": e, "converged": False,
-              "force_balanced": balanced, "bisections": drv["bisections"], **residuals(sim)}
+              "force_balanced": balanced, "bisections": drv["bisections"],
+              "reopened": drv.get("reopened", 0), **residuals(sim)}
     result["converged"] = is_converged(result, target)
     io.atomic_write_text(files.dir / "jammed.json", json.dumps(result, indent=2) + "\n")
     files.finalize()
