@@ -764,12 +764,18 @@ def latest_restart(work: Path) -> Path | None:
     shrinks when a tapped packing is in flight), so each candidate, newest first, is read
     back by LAMMPS itself (:func:`restart_is_complete`) and the first that reads is taken.
     """
+    return _newest_complete(work, restart_is_complete)
+
+
+def _newest_complete(work: Path, is_complete) -> Path | None:
+    """The newest ``restart.<step>`` in ``work`` that is not empty and that
+    ``is_complete(path)`` accepts, newest first, or None."""
     if not work.exists():
         return None
     files = sorted((p for p in work.glob("restart.*") if p.name.split(".")[-1].isdigit()),
                    key=lambda p: int(p.name.split(".")[-1]))
     for path in reversed(files):
-        if path.stat().st_size > 0 and restart_is_complete(path):
+        if path.stat().st_size > 0 and is_complete(path):
             return path
     return None
 
@@ -1449,14 +1455,7 @@ def liggghts_latest_restart(work: Path) -> Path | None:
     tapping run in ``work``, or None: each candidate, newest first, is read back by
     LIGGGHTS itself (:func:`liggghts_restart_is_complete`), as :func:`latest_restart`
     does for LAMMPS."""
-    if not work.exists():
-        return None
-    files = sorted((p for p in work.glob("restart.*") if p.name.split(".")[-1].isdigit()),
-                   key=lambda p: int(p.name.split(".")[-1]))
-    for path in reversed(files):
-        if path.stat().st_size > 0 and liggghts_restart_is_complete(path):
-            return path
-    return None
+    return _newest_complete(work, liggghts_restart_is_complete)
 
 
 def liggghts_restart_is_complete(path: Path) -> bool:
