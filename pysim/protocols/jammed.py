@@ -133,6 +133,31 @@ def is_converged(result: dict, energy_target: float) -> bool:
     return bool(np.isfinite(worst) and worst < BALANCE_TOL)
 
 
+def next_trial(drv: dict, e: float, target: float, max_bisections: int) -> float | None:
+    """The bisection's next packing fraction, or ``None`` when it is done.
+
+    ``drv`` holds the bracket (``lo``: the densest unjammed fraction, ``None`` when there
+    is none yet; ``hi``: that of the jammed packing held, whose energy density is ``e``)
+    and the ``bisections`` so far. Done when ``e`` is within a factor 2 of ``target``,
+    after ``max_bisections``, or when the bracket is narrower than :data:`PHI_TOL` with
+    ``e`` at most :data:`REOPEN_ENERGY` (an energy jump inside the bracket). A bracket
+    that closes above :data:`REOPEN_ENERGY` is opened again below the packing
+    (``lo = None``, counted in ``drv["reopened"]``): its lower bound came from expanding
+    an earlier, denser packing that unjammed, while the packing reached step by step is
+    still jammed below it. Without a lower bound the next trial expands to the middle
+    of ``[0.9 hi, hi]``; otherwise to the middle of ``[lo, hi]``.
+    """
+    if target / 2 <= e <= 2 * target or drv["bisections"] >= max_bisections:
+        return None
+    if drv["lo"] is not None and drv["hi"] - drv["lo"] < PHI_TOL:
+        if e <= REOPEN_ENERGY:
+            return None
+        drv["lo"] = None
+        drv["reopened"] = drv.get("reopened", 0) + 1
+    lo = drv["lo"] if drv["lo"] is not None else 0.9 * drv["hi"]
+    return 0.5 * (lo + drv["hi"])
+
+
 def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = False,
         checkpoint_every: float = 300.0) -> dict:
     """Run the protocol; returns a summary (``phi_j``, ``energy_density``, residuals)."""
@@ -216,21 +241,10 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
             files.checkpoint(sim, drv)
         while drv["phase"] == "bisect":
             # sim holds the jammed packing at phi_hi; bisect from it towards phi_lo
-            e = _energy_density(sim, d_min)
-            if target / 2 <= e <= 2 * target or drv["bisections"] >= p["max_bisections"]:
+            goal = next_trial(drv, _energy_density(sim, d_min), target, p["max_bisections"])
+            if goal is None:
                 drv["phase"] = "done"
                 break
-            if drv["lo"] is not None and drv["hi"] - drv["lo"] < PHI_TOL:
-                if e <= REOPEN_ENERGY:
-                    drv["phase"] = "done"  # an energy jump within the bracket: no better
-                    break
-                # closed far above the target: the lower bound came from an expansion of
-                # an earlier, denser packing that unjammed, while the packing reached
-                # step by step is still jammed below it; open the bracket again below it
-                drv["lo"] = None
-                drv["reopened"] = drv.get("reopened", 0) + 1
-            lo = drv["lo"] if drv["lo"] is not None else 0.9 * drv["hi"]
-            goal = 0.5 * (lo + drv["hi"])
             trial = _copy(sim)
             trial.rescale_box((drv["hi"] / goal) ** (1.0 / s.dimension))
             e, balanced = relaxed_energy(trial)

@@ -143,3 +143,34 @@ def test_converged_needs_the_energy_and_balanced_forces():
            "torque_residual_max": 0.5}
     assert is_converged(old, 1e-15)
     assert not is_converged({**old, "fire_balanced": False}, 1e-15)
+
+
+def test_bisection_reopens_a_bracket_that_closes_far_above_the_target():
+    """``next_trial``: a bracket narrower than PHI_TOL on a packing far above the target
+    energy (the quick profile's alpha 0.12 seed 1: U/L^2 = 8.8e-6, whose lower bound came
+    from an expansion of a denser packing that unjammed) is opened again below it and
+    bisected from ``0.9 hi``; a closed bracket with an energy jump below REOPEN_ENERGY
+    ends the bisection, as does an energy on target or ``max_bisections``."""
+    from pysim.protocols.jammed import PHI_TOL, REOPEN_ENERGY, next_trial
+
+    hi = 0.8682
+    closed = {"lo": hi - PHI_TOL / 2, "hi": hi, "bisections": 20}
+    drv = dict(closed)
+    goal = next_trial(drv, 8.8e-6, 1e-15, 50)
+    assert drv["lo"] is None and drv["reopened"] == 1
+    assert goal == pytest.approx(0.95 * hi)  # the middle of [0.9 hi, hi]
+    drv["lo"], drv["hi"] = goal, goal + PHI_TOL / 4  # closes again on another packing
+    next_trial(drv, 1e-9, 1e-15, 50)
+    assert drv["reopened"] == 2
+    # an energy jump inside the bracket, below REOPEN_ENERGY: nothing better to find
+    drv = dict(closed)
+    assert next_trial(drv, 0.5 * REOPEN_ENERGY, 1e-15, 50) is None
+    assert drv["lo"] == closed["lo"] and "reopened" not in drv
+    # open bracket: its middle; on target or out of bisections: done
+    drv = {"lo": 0.86, "hi": 0.87, "bisections": 3}
+    assert next_trial(drv, 8.8e-6, 1e-15, 50) == pytest.approx(0.865)
+    assert next_trial(drv, 1.5e-15, 1e-15, 50) is None
+    assert next_trial({**drv, "bisections": 50}, 8.8e-6, 1e-15, 50) is None
+    # no lower bound yet: the middle of [0.9 hi, hi]
+    assert next_trial({"lo": None, "hi": 0.87, "bisections": 0}, 1e-6, 1e-15, 50) == \
+        pytest.approx(0.95 * 0.87)
