@@ -161,29 +161,50 @@ def message_figure(out, message: str):
     _save(fig, out)
 
 
-def trends(summary, parameter, observables, out, title=None, references=None):
+def trends(summary, parameter, observables, out, title=None, references=None, series=None):
     """Observables versus a case parameter (e.g. ``alpha``), one panel each, engines
     overlaid: mean and standard deviation over seeds (a series ``'<engine> <protocol>'``,
     runs of another protocol, in the engine's colour with open squares). ``references``
     maps an observable to ``[(label, x (array), y (array))]`` curves drawn in black
-    (theory)."""
+    (theory). ``series``: a second parameter column (e.g. ``bond_number``) that splits
+    each engine's points into one line per value, coloured by value, with one marker and
+    line style per engine."""
     have = summary[np.isfinite(summary.value.astype(float))]
     obs = [o for o in observables if o in set(have.observable)]
     if not obs or parameter not in summary.columns:
         message_figure(out, f"no {', '.join(observables)} versus {parameter} to draw")
         return
+    if series is not None and series not in summary.columns:
+        raise ValueError(f"series {series!r} is no column of the summary "
+                         f"(columns: {', '.join(map(str, summary.columns))})")
+    values = sorted(summary[series].dropna().unique()) if series else [None]
+    cmap = plt.get_cmap("viridis")
+    engines = sorted(summary.engine.unique())
     fig, axes = plt.subplots(1, len(obs), figsize=(4.2 * len(obs), 3.6), squeeze=False)
     for ax, o in zip(axes[0], obs):
         s = summary[summary.observable == o]
         for engine, g in s.groupby("engine"):
-            st = g.groupby(parameter)["value"].agg(["mean", "std"]).reset_index()
-            # a series named '<engine> <protocol>' (another protocol): the engine's colour,
-            # open squares, dashed
             base = engine.split()[0]
             other = base != engine
-            ax.errorbar(st[parameter], st["mean"], yerr=st["std"].fillna(0),
-                        fmt="s--" if other else "o-", mfc="none" if other else None,
-                        capsize=3, color=ENGINE_COLORS.get(base, "k"), label=engine, ms=4)
+            for value in values:
+                gv = g if value is None else g[g[series] == value]
+                if gv.empty:
+                    continue
+                st = gv.groupby(parameter)["value"].agg(["mean", "std"]).reset_index()
+                if value is None:
+                    # a series named '<engine> <protocol>' (another protocol): the engine's
+                    # colour, open squares, dashed
+                    ax.errorbar(st[parameter], st["mean"], yerr=st["std"].fillna(0),
+                                fmt="s--" if other else "o-", mfc="none" if other else None,
+                                capsize=3, color=ENGINE_COLORS.get(base, "k"), label=engine,
+                                ms=4)
+                else:
+                    k = engines.index(engine)
+                    color = cmap(values.index(value) / max(len(values) - 1, 1) * 0.9)
+                    ax.errorbar(st[parameter], st["mean"], yerr=st["std"].fillna(0),
+                                fmt="os^Dv"[k % 5] + ["-", "--", ":", "-."][k % 4],
+                                capsize=3, color=color, label=f"{engine}, {series} {value:g}",
+                                ms=4)
         lo, hi = s[parameter].min(), s[parameter].max()
         for label, x, y in (references or {}).get(o, []):
             keep = (np.asarray(x) >= lo) & (np.asarray(x) <= hi)  # theory only where data are
@@ -348,7 +369,11 @@ def deposit_profiles(runs, out):
         color = cmap(r["index"] % 10)
         ls = "-" if r["engine"] == "pysim" else ("--" if r["engine"] == "lammps" else ":")
         axes[0].plot(pr.phi, pr.x, color=color, ls=ls, marker=".", label=r["label"])
-        axes[1].plot(pr.sigma_vv, pr.x, color=color, ls=ls, marker=".")
+        if "sigma_vv_err" in pr:  # standard errors from the spread over columns
+            axes[1].errorbar(pr.sigma_vv, pr.x, xerr=pr.sigma_vv_err, color=color, ls=ls,
+                             marker=".", capsize=2, elinewidth=0.6)
+        else:
+            axes[1].plot(pr.sigma_vv, pr.x, color=color, ls=ls, marker=".")
         if "sigma_vv_fit" in pr and np.isfinite(pr.sigma_vv_fit).any():
             axes[1].plot(pr.sigma_vv_fit, pr.x, color=color, ls=ls, lw=0.6, alpha=0.7)
         axes[2].plot(pr.sigma_hh, pr.x, color=color, ls=ls, marker=".")
@@ -367,7 +392,8 @@ def deposit_profiles(runs, out):
         ax.set_xlabel(label)
         ax.set_ylabel("depth  x = h / W")
         ax.invert_yaxis()
-    axes[1].set_title("thin: Janssen fit", fontsize=8)
+    axes[1].set_title("thin: Janssen fit (weighted by the bars: standard errors over "
+                      "columns)", fontsize=8)
     axes[3].set_xlabel("angle between spine and horizontal (deg)")
     axes[3].set_title("final frame", fontsize=8)
     axes[3].set_ylabel("probability density (1/deg)")

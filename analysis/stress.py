@@ -118,6 +118,35 @@ def coarse_grain(frame: Frame, sigma_i: np.ndarray, edges: list) -> tuple[np.nda
     return total.reshape(*shape, 3, 3) / vol[..., None, None], count
 
 
+def slab_stress_errors(frame: Frame, contacts: Contacts, edges, lo: float, hi: float,
+                       columns: int) -> tuple[np.ndarray, np.ndarray]:
+    """Standard errors of the vertical and mean horizontal normal stress in horizontal
+    slabs (``edges`` along the vertical axis) from their spread over ``columns`` equal
+    columns per horizontal axis of the container ``lo < x (, y) < hi``: the sample
+    standard deviation ``s`` of the column stresses over the square root of their
+    number, ``s / sqrt(n)`` (``n = columns^(d-1)``; the slab stress is the columns'
+    mean when every grain centre lies in the container). Returns
+    ``(sigma_vv_err, sigma_hh_err)`` (K,), stress units. Neighbouring grains carry
+    correlated stresses (force chains); columns much wider than a chain's correlation
+    length give honest errors, narrower ones underestimate them."""
+    if columns < 2:
+        raise ValueError(f"columns must be at least 2 to measure a spread, got {columns}")
+    if not hi > lo:
+        raise ValueError(f"the container must have hi > lo, got lo = {lo}, hi = {hi}")
+    d, v = frame.dim, frame.vertical
+    horiz = [k for k in range(d) if k != v]
+    spec = [None] * d
+    spec[v] = np.asarray(edges, dtype=np.float64)
+    for k in horiz:
+        spec[k] = np.linspace(lo, hi, columns + 1)
+    sig, _ = coarse_grain(frame, particle_stress(frame, contacts), spec)
+    sig = np.moveaxis(sig, v, 0).reshape(len(spec[v]) - 1, -1, 3, 3)  # (slab, column, 3, 3)
+    n = sig.shape[1]
+    s_vv = sig[:, :, v, v]
+    s_hh = np.mean([sig[:, :, k, k] for k in horiz], axis=0)
+    return s_vv.std(axis=1, ddof=1) / np.sqrt(n), s_hh.std(axis=1, ddof=1) / np.sqrt(n)
+
+
 def _pressure_of(sigma, dim):
     return -np.trace(sigma[..., :dim, :dim], axis1=-2, axis2=-1) / dim
 

@@ -24,6 +24,9 @@ from analysis.packing import packing_fraction
 from analysis.stress import pressure
 
 TIDY_COLUMNS = ["study", "case", "engine", "seed", "observable", "value", "uncertainty"]
+#: columns per horizontal axis over which a deposit's slab stresses spread, for their
+#: standard errors (:func:`analysis.stress.slab_stress_errors`): 4 in 2-D, 2 x 2 in 3-D
+STRESS_COLUMNS = {2: 4, 3: 2}
 
 
 def frame_curves(run: RunData, c_min: int | None = None) -> pd.DataFrame:
@@ -281,8 +284,11 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
     * Janssen saturation fits ``sigma(x) = sigma_m (1 - exp(-x / h_s))``, ``x = depth /
       W``, of the vertical stress and of the pressure in slabs of thickness ``slab``
       (compressive positive; fits over slabs with at least 3 grains, not the loose top
-      slab): ``sigma_m_vv``, ``h_s_vv`` with standard errors as uncertainties,
-      ``chi2_dof_vv``, and ``sigma_m_p``, ``h_s_p``; ``janssen_saturated`` 1 when the
+      slab): ``sigma_m_vv``, ``h_s_vv`` with standard errors as uncertainties and
+      ``chi2_dof_vv``, the reduced chi-square of a fit weighted by the slab stresses'
+      standard errors (their spread over :data:`STRESS_COLUMNS` columns of the
+      container, :func:`analysis.stress.slab_stress_errors`), and ``sigma_m_p``,
+      ``h_s_p`` (unweighted); ``janssen_saturated`` 1 when the
       fitted ``h_s`` lies within the depth of the data, else 0 and the fit values NaN (a
       straight profile fixes only the slope ``sigma_m / h_s``);
     * ``k_ratio``: ``sigma_hh / sigma_vv`` averaged over the lower half of the deposit;
@@ -292,7 +298,7 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
 
     Returns ``(rows, profile)``: rows ``(observable, value, uncertainty)`` and a table of
     the slab profile (``depth``, ``x``, ``phi``, ``sigma_vv``, ``sigma_hh``, ``pressure``,
-    ``count``, the fitted curves, and the Janssen apparent mass of every engine:
+    ``count``, ``sigma_vv_err``, ``sigma_hh_err``, the fitted curves, and the Janssen apparent mass of every engine:
     ``mass_above``, the grain mass above the slab centre, and ``apparent_mass`` =
     ``sigma_vv W^(d-1) / g``, the part of it the grains below carry; equal without wall
     friction, saturating with depth when the walls hold weight).
@@ -300,7 +306,7 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
     from analysis.janssen import JanssenFit, JanssenFitError, janssen
     from analysis.order import AngleToHorizontal
     from analysis.packing import FilledPackingFraction, cumulative_measure, slab_packing_fraction
-    from analysis.stress import StressProfile
+    from analysis.stress import StressProfile, slab_stress_errors
 
     run = RunData(run_dir)
     frames = run.frames()
@@ -321,15 +327,19 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
     total = float(np.sum(frame.particle_measures()))
     prof["mass_above"] = density * (total - cumulative_measure(frame, sp.centers))
     prof["apparent_mass"] = prof["sigma_vv"] * area / gravity
-    use = (prof["count"] >= 3) & (prof["depth"] > 0.5 * slab)
+    vv_err, hh_err = slab_stress_errors(frame, contacts, edges, 0.0, width,
+                                        STRESS_COLUMNS[d])
+    prof["sigma_vv_err"], prof["sigma_hh_err"] = vv_err, hh_err
+    use = (prof["count"] >= 3) & (prof["depth"] > 0.5 * slab) & (prof["sigma_vv_err"] > 0)
     rows = [("phi_deposit", float(fill.phi), np.nan),
             ("height", float(fill.height), np.nan),
             ("angle_mean", float(ang.mean_deg), np.nan),
             ("flat_fraction", float(np.mean(ang.angles < np.radians(15.0))), np.nan)]
     for col, tag in (("sigma_vv", "vv"), ("pressure", "p")):
+        err = prof.loc[use, "sigma_vv_err"] if tag == "vv" else None
         try:
             fit = JanssenFit(form="saturation", width=width).compute(
-                prof.loc[use, "depth"], prof.loc[use, col])
+                prof.loc[use, "depth"], prof.loc[use, col], err)
         except (JanssenFitError, RuntimeError):
             rows += [(f"sigma_m_{tag}", np.nan, np.nan), (f"h_s_{tag}", np.nan, np.nan)]
             prof[f"{col}_fit"] = np.nan

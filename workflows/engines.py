@@ -715,8 +715,9 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
                                   2 if kind(case) == "2d" else 3)
         os.replace(work / "rods.dump", particles)
     elif glued:
+        width = case.get("container", {}).get("width")
         stats = convert_glued_rods(work / "contacts.native", particles, work / "contacts.dump",
-                                   work / "rods.dump")
+                                   work / "rods.dump", None if width is None else float(width))
         os.replace(work / "rods.dump", particles)
     elif multisphere and tapping:
         stats = convert_liggghts_tap(work, case)
@@ -875,24 +876,69 @@ def write_glued_data(init_path, out_path, case: dict) -> float:
     return vtot
 
 
-def convert_glued_rods(native: Path, particles: Path, out_contacts: Path, out_particles: Path):
+#: LAMMPS deposition walls (fix wall/gran ... contacts, dumped as f_<fix>[1..7]), in pysim's
+#: order of wall ids -(k + 1): (fix id, axis, at the far side x = W)
+GLUED_WALLS = (("wallx", 0, False), ("wallx", 0, True), ("wally", 1, False), ("wally", 1, True),
+               ("base", 2, False))
+
+
+def glued_wall_contacts(frame, table, cols, width: float):
+    """Sphere-wall contacts of the LAMMPS deposition deck from its wall fixes' per-atom
+    contact arrays (``fix wall/gran ... contacts``: ``f_<fix>[1]`` 1 in contact,
+    ``[2..4]`` the wall's force on the sphere, ``[5..7]`` the contact's point on the wall;
+    rows of ``table`` in ``frame`` order): one row per touching sphere and wall, ``j`` the
+    wall id of :data:`GLUED_WALLS` (pysim's numbering: x = 0, x = W, y = 0, y = W, base;
+    the fix ``wallx`` holds both x walls, told apart by the point), normal from the sphere
+    to the wall, overlap ``R - distance``, point in the middle of the overlap. Returns a
+    :class:`analysis.frame.Contacts`."""
+    from analysis.frame import Contacts
+
+    c = {name: k for k, name in enumerate(cols)}
+    rows = []
+    for w, (fix, axis, far) in enumerate(GLUED_WALLS):
+        flag = table[:, c[f"f_{fix}[1]"]]
+        force = table[:, [c[f"f_{fix}[{k}]"] for k in (2, 3, 4)]]
+        wall = table[:, [c[f"f_{fix}[{k}]"] for k in (5, 6, 7)]]
+        side = wall[:, axis] > 0.5 * width
+        on = np.flatnonzero((flag > 0) & (side == far))
+        normal = np.zeros((len(on), 3))
+        normal[:, axis] = 1.0 if far else -1.0
+        gap = np.abs(wall[on, axis] - frame.x[on, axis])
+        overlap = frame.radius[on] - gap
+        point = frame.x[on] + (frame.radius[on] - 0.5 * overlap)[:, None] * normal
+        rows.append((frame.ids[on], np.full(len(on), -(w + 1)), point, normal, overlap,
+                     force[on]))
+    i, j, point, normal, overlap, force = (np.concatenate(x) for x in zip(*rows))
+    return Contacts(frame.step, i.astype(np.int64), j.astype(np.int64), point, normal, overlap,
+                    force)
+
+
+def convert_glued_rods(native: Path, particles: Path, out_contacts: Path, out_particles: Path,
+                       width: float | None = None):
     """Glued-sphere output of the LAMMPS rods deck -> rods in the common format.
 
     Each frame of spheres (``id mol type x y z radius``) becomes a frame of
     spherocylinders (:func:`analysis.contacts.glued_bodies`: centre, axis, spine length
     from the sphere centres, id = molecule id); the sphere contacts of two rods merge into
     one rod-rod contact (:func:`analysis.contacts.merge_glued_contacts`: summed force,
-    force-weighted point, deepest overlap).
+    force-weighted point, deepest overlap). When the dump has the deposition deck's wall
+    columns (``f_base[1]`` ...; ``width`` the container's), the sphere-wall contacts
+    (:func:`glued_wall_contacts`) merge per rod and wall as well.
     """
     from analysis.frame import Contacts
     from analysis.io import read_particle_frames
 
     spheres = {f.step: f for f in read_particle_frames(particles)}
-    mol = {}
+    mol, walls = {}, {}
     for step, _b, _p, cols, table in _iter_dump(particles):
         c = {name: k for k, name in enumerate(cols)}
         order = np.argsort(table[:, c["id"]], kind="stable")
         mol[step] = table[order, c["mol"]].astype(np.int64)
+        if "f_base[1]" in c:
+            if width is None:
+                raise EngineError(f"{particles} has wall contact columns: give the container "
+                                  "width to tell its walls apart")
+            walls[step] = glued_wall_contacts(spheres[step], table[order], cols, width)
     dropped = 0
     with open(io.part_path(out_contacts), "w") as fc, open(io.part_path(out_particles), "w") as fp:
         for step, _box, cols, table in _iter_local(native):
@@ -903,6 +949,8 @@ def convert_glued_rods(native: Path, particles: Path, out_contacts: Path, out_pa
             dropped += int(np.count_nonzero(~keep))
             sph = Contacts(step, ids_i[keep].astype(np.int64), ids_j[keep].astype(np.int64),
                            point[keep], n[keep], delta[keep], (table[:, 3:6] + table[:, 6:9])[keep])
+            if step in walls:
+                sph = _with_walls(sph, walls[step])
             _write_glued_frame(fp, fc, fr, sph, mol[step])
     io.finalize(out_contacts)
     io.finalize(out_particles)
@@ -1012,17 +1060,20 @@ def _convert_multisphere(native: Path, particles: Path, out_contacts: Path,
             n, delta, point = _geometry(fr, ids_i, ids_j)
             keep = delta > 0
             dropped += int(np.count_nonzero(~keep))
-            w = walls[step]
-            sph = Contacts(step, np.concatenate([ids_i[keep].astype(np.int64), w.i]),
-                           np.concatenate([ids_j[keep].astype(np.int64), w.j]),
-                           np.concatenate([point[keep], w.point]),
-                           np.concatenate([n[keep], w.normal]),
-                           np.concatenate([delta[keep], w.overlap]),
-                           np.concatenate([table[keep, 9:12], w.force]))
-            _write_glued_frame(fp, fc, fr, sph, body[step])
+            sph = Contacts(step, ids_i[keep].astype(np.int64), ids_j[keep].astype(np.int64),
+                           point[keep], n[keep], delta[keep], table[keep, 9:12])
+            _write_glued_frame(fp, fc, fr, _with_walls(sph, walls[step]), body[step])
     io.finalize(out_contacts)
     io.finalize(out_particles)
     return {"dropped": dropped}
+
+
+def _with_walls(pairs, walls):
+    """One :class:`analysis.frame.Contacts` of sphere-sphere rows followed by wall rows."""
+    from analysis.frame import Contacts
+
+    return Contacts(pairs.step, *(np.concatenate([getattr(pairs, k), getattr(walls, k)])
+                                  for k in ("i", "j", "point", "normal", "overlap", "force")))
 
 
 def _iter_dump(path: Path):

@@ -149,3 +149,45 @@ def test_particle_stress_of_wall_rows_and_cylinder_wall_profile():
     # each sphere: l = R n (to the wall), F = -f n: sigma^i = -R f n n
     n0 = c.normal[0]
     np.testing.assert_allclose(ps[fr.index_of(c.i[:1])[0]], -0.5 * f * np.outer(n0, n0), atol=1e-12)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_slab_stress_errors_are_the_spread_over_columns(dim):
+    """``slab_stress_errors``: zero for a uniformly loaded lattice; with random contact
+    forces, the standard deviation over the container's columns of the column stresses
+    (summed particle stresses over the column's measure, computed here with masks) over
+    the square root of the number of columns, for sigma_vv and the mean of sigma_hh."""
+    from analysis.stress import slab_stress_errors
+
+    a, k, m = 0.98, 1e4, 8
+    if dim == 3:
+        x = cubic(m, spacing=a) + 0.3
+        fr = frame_of(x, 0.5, [m * a] * 3)
+    else:
+        x = square(m, spacing=a) + [0.3, 0.3, 0.0]
+        fr = frame_of(x, 0.5, [m * a, m * a, 1.0])
+    c = linear_forces(geometric_contacts(fr, 0.0), k)
+    v = fr.vertical
+    edges = np.array([0.0, 2 * a, 5 * a, m * a])
+    cols = 2 if dim == 3 else 4
+    vv, hh = slab_stress_errors(fr, c, edges, 0.0, m * a, cols)
+    np.testing.assert_allclose(vv, 0.0, atol=1e-9 * k)
+    np.testing.assert_allclose(hh, 0.0, atol=1e-9 * k)
+    c.force = c.force * np.random.default_rng(3).uniform(0.2, 2.0, size=(c.n, 1))
+    vv, hh = slab_stress_errors(fr, c, edges, 0.0, m * a, cols)
+    s_i = particle_stress(fr, c)
+    horiz = [ax for ax in range(dim) if ax != v]
+    col_of = [np.minimum((fr.x[:, ax] / (m * a / cols)).astype(int), cols - 1) for ax in horiz]
+    col = col_of[0] if dim == 2 else col_of[0] * cols + col_of[1]
+    measure = (m * a / cols) ** (dim - 1)
+    for s in range(len(edges) - 1):
+        in_slab = (fr.x[:, v] >= edges[s]) & (fr.x[:, v] < edges[s + 1])
+        tens = np.array([s_i[in_slab & (col == q)].sum(axis=0) for q in range(cols ** (dim - 1))])
+        tens /= measure * (edges[s + 1] - edges[s])
+        n = len(tens)
+        assert vv[s] == pytest.approx(tens[:, v, v].std(ddof=1) / np.sqrt(n), rel=1e-12)
+        t_hh = np.mean([tens[:, ax, ax] for ax in horiz], axis=0)
+        assert hh[s] == pytest.approx(t_hh.std(ddof=1) / np.sqrt(n), rel=1e-12)
+        assert vv[s] > 0
+    with pytest.raises(ValueError, match="columns must be at least 2"):
+        slab_stress_errors(fr, c, edges, 0.0, m * a, 1)

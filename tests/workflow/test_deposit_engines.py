@@ -48,6 +48,21 @@ def test_lammps_deposit_deck(dep_case, tmp_path):
     assert np.all(ends[:, :2] > 0.5 - 0.01) and np.all(ends[:, :2] < w - 0.5 + 0.01)
     assert np.all(ends[:, 2] > 0.5 - 0.01)
     assert np.all(contacts.overlap < 0.02)
+    # the wall fixes' contacts become wall rows in pysim's numbering (x = 0, x = W, y = 0,
+    # y = W, base = -1 ... -5), at the walls, and at rest they carry the deposit's weight
+    walls = contacts.j <= 0
+    assert set(contacts.j[walls]) <= {-1, -2, -3, -4, -5} and np.any(contacts.j == -5)
+    for wid, axis, at in ((-1, 0, 0.0), (-2, 0, w), (-3, 1, 0.0), (-4, 1, w), (-5, 2, 0.0)):
+        on = contacts.j == wid
+        np.testing.assert_allclose(contacts.point[on, axis], at, atol=0.02)
+        assert np.all(contacts.normal[on, axis] == (1.0 if at > 0 else -1.0))
+    weight = case["particles"]["density"] * float(np.sum(frame.particle_measures()))
+    assert float(np.sum(contacts.force[walls, 2])) == pytest.approx(weight, rel=0.01)
+    rows, _ = analyse_deposit(tmp_path / "lammps", width=w, gravity=1.0, slab=3.0,
+                              base_wall_id=-5)
+    # LAMMPS now gives the apparent mass at the base (this column falls freely, so its
+    # walls may push down: above 1 is possible, README)
+    assert 0.5 < {n: x for n, x, _ in rows}["apparent_mass_fraction"] < 1.5
 
     (tmp_path / "case.yaml").write_text(yaml.safe_dump(case))
     r = subprocess.run([sys.executable, "-m", "pysim", "run", str(tmp_path / "case.yaml"),

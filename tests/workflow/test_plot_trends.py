@@ -1,6 +1,7 @@
 """The trends figure keeps runs of another protocol (LIGGGHTS' settled rod beds) apart
 from the study's compressions, so that no line joins the two."""
 import pandas as pd
+import pytest
 
 from workflows.scripts import plot_trends
 
@@ -23,3 +24,40 @@ def test_settled_runs_get_their_own_series(tmp_path):
     assert plot_trends.main(["--summary", str(summary), "--study", "s", "--parameter", "alpha",
                              "--out", str(out)]) == 0
     assert out.stat().st_size > 1000
+
+
+def test_deposits_draw_one_line_per_bond_number(tmp_path, monkeypatch):
+    """Deposits vary the aspect ratio and the Bond number: with ``--series bond_number``
+    each engine gets one line per Bond number on every deposit observable, and the mean
+    angle and K panels carry the isotropic references (32.7 deg in 3-D, K = 1)."""
+    from analysis import plots
+
+    rows = []
+    for alpha in (1.0, 4.0):
+        for bo in (0.0, 1000.0):
+            for engine in ("pysim", "lammps"):
+                for obs, value in (("phi_deposit", 0.5 - bo * 1e-4), ("angle_mean", 25 + alpha),
+                                   ("k_ratio", 0.5 + bo * 1e-4)):
+                    rows.append(dict(study="dep", case=f"a{alpha}_b{bo}", engine=engine,
+                                     seed=1, observable=obs, value=value, alpha=alpha,
+                                     bond_number=bo))
+    summary = tmp_path / "summary.csv"
+    pd.DataFrame(rows).to_csv(summary, index=False)
+    figs = []
+    monkeypatch.setattr(plots, "_save", lambda fig, out: figs.append(fig))
+    assert plot_trends.main(["--summary", str(summary), "--study", "dep", "--parameter", "alpha",
+                             "--series", "bond_number", "--out", str(tmp_path / "t.png")]) == 0
+    axes = figs[0].axes
+    assert [ax.get_ylabel() for ax in axes] == ["phi_deposit", "angle_mean", "k_ratio"]
+    for ax in axes:
+        labels = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert {"pysim, bond_number 0", "pysim, bond_number 1000", "lammps, bond_number 0",
+                "lammps, bond_number 1000"} <= set(labels)
+    refs = {ax.get_ylabel(): [ln.get_ydata()[0] for ln in ax.get_lines()
+                              if ln.get_label().startswith("isotropic")] for ax in axes}
+    assert refs["angle_mean"] == [pytest.approx(32.704, abs=1e-3)]
+    assert refs["k_ratio"] == [1.0]
+    # an unknown series column is a clear error
+    with pytest.raises(ValueError, match="series 'nope'"):
+        plot_trends.main(["--summary", str(summary), "--study", "dep", "--parameter", "alpha",
+                          "--series", "nope", "--out", str(tmp_path / "t.png")])

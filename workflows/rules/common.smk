@@ -74,6 +74,8 @@ def get_final_output():
             out.append(f"{RESULTS}/{study}/figures/tapping.png")
         elif study in deposit:
             out.append(f"{RESULTS}/{study}/figures/deposit.png")
+            if "alpha" in varying_parameters(CFG, study):  # deposits versus d = 1 + alpha
+                out.append(f"{RESULTS}/{study}/figures/trends.png")
         elif varying_parameters(CFG, study):
             out.append(f"{RESULTS}/{study}/figures/trends.png")
         cases = [c for k, c in CFG["_cases"].items() if k[0] == study]

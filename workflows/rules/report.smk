@@ -63,6 +63,14 @@ def _trend_parameter(study):
     return "alpha" if "alpha" in params else (params[0] if params else None)
 
 
+def _trend_series(study):
+    # deposits vary the Bond number beside the aspect ratio: one line per Bond number
+    params = set(varying_parameters(CFG, study))
+    if _trend_parameter(study) == "alpha" and "bond_number" in params:
+        return "--series bond_number"
+    return ""
+
+
 rule plot_trends:
     input:
         f"{RESULTS}/summary.csv",
@@ -77,9 +85,11 @@ rule plot_trends:
     params:
         parameter=lambda wc: _trend_parameter(wc.study),
         dimension=lambda wc: CFG["studies"][wc.study]["case"]["particles"].get("dimension", 3),
+        series=lambda wc: _trend_series(wc.study),
     shell:
         "{PYTHON} -m workflows.scripts.plot_trends --summary {input} --study {wildcards.study}"
-        " --parameter {params.parameter} --dimension {params.dimension} --out {output} 2> {log}"
+        " --parameter {params.parameter} --dimension {params.dimension} {params.series}"
+        " --out {output} 2> {log}"
 
 
 rule plot_angles:

@@ -13,24 +13,33 @@ from analysis import plots
 
 OBSERVABLES = ["phi_j", "z_j", "z_j_bonds", "s_nematic_j", "sqrt_n_s2", "sqrt_n_s4",
                "fraction_side_side", "fraction_tip_side", "fraction_tip_tip"]
+#: deposits (analysis.summary.analyse_deposit): packing fraction of the filled part, mean
+#: angle between spines and the horizontal (degrees), stress ratio K = sigma_hh / sigma_vv
+#: in the lower half, Janssen saturation depth h_s / W of sigma_vv
+DEPOSIT_OBSERVABLES = ["phi_deposit", "angle_mean", "k_ratio", "h_s_vv"]
 
 
 def references(parameter: str, dimension: int) -> dict:
     """Theory on the observables' axes: isostatic counts and, in 3-D, the random contact
-    equation phi = <C> V / V_excl evaluated at the isostatic <C>."""
+    equation phi = <C> V / V_excl evaluated at the isostatic <C>; for deposits the mean
+    angle to the horizontal of isotropic orientations (3-D: ``pi/2 - 1`` rad = 32.7 deg,
+    2-D: 45 deg) and the isotropic stress ratio ``K = 1``."""
     if parameter != "alpha":
         return {}
+    a = np.linspace(0.0, 20.0, 201)
+    iso_angle = np.degrees(np.pi / 2 - 1.0) if dimension == 3 else 45.0
+    deposit = {"angle_mean": [("isotropic orientations", a, np.full_like(a, iso_angle))],
+               "k_ratio": [("isotropic stress", a, np.ones_like(a))]}
     from analysis import theory
 
-    a = np.linspace(0.0, 20.0, 201)
     if dimension == 2:
         z2 = np.where(a > 0, theory.isostatic_z(2, True), theory.isostatic_z(2, False))
-        return {"z_j_bonds": [("isostatic 2 d_f", a, z2)]}
+        return {"z_j_bonds": [("isostatic 2 d_f", a, z2)], **deposit}
     z_iso = np.where(a > 0, theory.isostatic_z(3, True), theory.isostatic_z(3, False))
     thick = a >= 3  # the random contact equation holds for slender rods
     phi_rce = np.array([theory.rce_packing_fraction(10.0, ai) for ai in a[thick]])
     return {"z_j": [("isostatic 2 d_f", a, z_iso)],
-            "phi_j": [("random contact eq., <C> = 10", a[thick], phi_rce)]}
+            "phi_j": [("random contact eq., <C> = 10", a[thick], phi_rce)], **deposit}
 
 
 def label_protocols(df: pd.DataFrame) -> pd.DataFrame:
@@ -53,13 +62,15 @@ def main(argv=None) -> int:
     ap.add_argument("--study", required=True)
     ap.add_argument("--parameter", required=True)
     ap.add_argument("--dimension", type=int, default=3)
+    ap.add_argument("--series", default=None,
+                    help="a second varying parameter (column) drawn as one line per value")
     ap.add_argument("--out", required=True, type=Path)
     a = ap.parse_args(argv)
     df = pd.read_csv(a.summary)
     df = df[df.study == a.study]
     df = label_protocols(df)
-    plots.trends(df, a.parameter, OBSERVABLES, a.out, title=a.study,
-                 references=references(a.parameter, a.dimension))
+    plots.trends(df, a.parameter, OBSERVABLES + DEPOSIT_OBSERVABLES, a.out, title=a.study,
+                 references=references(a.parameter, a.dimension), series=a.series)
     return 0
 
 
