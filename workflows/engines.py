@@ -687,12 +687,10 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
     env = dict(os.environ, OMP_NUM_THREADS="1")
     t0 = time.perf_counter()
     with open(screen_path, "w") as screen:
-        try:
-            proc = subprocess.run(cmd, stdout=screen, stderr=subprocess.STDOUT, timeout=timeout,
-                                  cwd=work, env=env)
-        except subprocess.TimeoutExpired:
+        proc = _run_pruning(cmd, screen, work, env, timeout)
+        if proc is None:
             raise EngineError(f"{engine} ran past its budget of {timeout:g} s; "
-                              f"log: {screen_path}") from None
+                              f"log: {screen_path}")
     wall = time.perf_counter() - t0
     text = screen_path.read_text(errors="replace")
     if proc.returncode != 0 or _error_line(text):
@@ -755,6 +753,51 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
 
 #: LAMMPS writes a restart file every this many dump intervals
 RESTART_DUMPS = 10
+#: restart files kept while an engine runs (the newest may be half written, so two
+#: complete ones stay); older ones are deleted every PRUNE_SECONDS: a long deposit wrote
+#: 140 files, 60 MB, for 150 rods
+KEEP_RESTARTS = 3
+PRUNE_SECONDS = 10.0
+
+
+def prune_restarts(work: Path, keep: int = KEEP_RESTARTS) -> list[Path]:
+    """Delete all but the ``keep`` newest ``restart.<step>`` files in ``work`` (by step);
+    returns the deleted paths."""
+    if keep < 1:
+        raise ValueError(f"keep must be at least 1 (the newest restart file), got {keep}")
+    files = sorted((p for p in work.glob("restart.*") if p.name.split(".")[-1].isdigit()),
+                   key=lambda p: int(p.name.split(".")[-1]))
+    old = files[:-keep]
+    for path in old:
+        path.unlink(missing_ok=True)
+    return old
+
+
+def _run_pruning(cmd, screen, work: Path, env: dict, timeout: float):
+    """Run ``cmd`` in ``work`` with output to ``screen`` and prune its restart files
+    (:func:`prune_restarts`) every :data:`PRUNE_SECONDS` while it runs. Returns the
+    finished process, or None when it ran past ``timeout`` seconds (it is killed, as it is
+    on any exception here)."""
+    proc = subprocess.Popen(cmd, stdout=screen, stderr=subprocess.STDOUT, cwd=work, env=env)
+    deadline = time.perf_counter() + timeout
+    try:
+        while True:
+            left = deadline - time.perf_counter()
+            try:
+                proc.wait(timeout=max(min(PRUNE_SECONDS, left), 0.0))
+                break
+            except subprocess.TimeoutExpired:
+                prune_restarts(work)
+                if time.perf_counter() >= deadline:
+                    proc.kill()
+                    proc.wait()
+                    return None
+    except BaseException:
+        proc.kill()
+        proc.wait()
+        raise
+    prune_restarts(work)
+    return proc
 
 
 def latest_restart(work: Path) -> Path | None:
