@@ -194,17 +194,15 @@ def trends(summary, parameter, observables, out, title=None, references=None, se
                 if value is None:
                     # a series named '<engine> <protocol>' (another protocol): the engine's
                     # colour, open squares, dashed
-                    ax.errorbar(st[parameter], st["mean"], yerr=st["std"].fillna(0),
-                                fmt="s--" if other else "o-", mfc="none" if other else None,
-                                capsize=3, color=ENGINE_COLORS.get(base, "k"), label=engine,
-                                ms=4)
+                    style = dict(fmt="s--" if other else "o-", mfc="none" if other else None,
+                                 color=ENGINE_COLORS.get(base, "k"), label=engine)
                 else:
                     k = engines.index(engine)
-                    color = cmap(values.index(value) / max(len(values) - 1, 1) * 0.9)
-                    ax.errorbar(st[parameter], st["mean"], yerr=st["std"].fillna(0),
-                                fmt="os^Dv"[k % 5] + ["-", "--", ":", "-."][k % 4],
-                                capsize=3, color=color, label=f"{engine}, {series} {value:g}",
-                                ms=4)
+                    style = dict(fmt="os^Dv"[k % 5] + ["-", "--", ":", "-."][k % 4],
+                                 color=cmap(values.index(value) / max(len(values) - 1, 1) * 0.9),
+                                 label=f"{engine}, {series} {value:g}")
+                ax.errorbar(st[parameter], st["mean"], yerr=st["std"].fillna(0), capsize=3,
+                            ms=4, **style)
         lo, hi = s[parameter].min(), s[parameter].max()
         for label, x, y in (references or {}).get(o, []):
             keep = (np.asarray(x) >= lo) & (np.asarray(x) <= hi)  # theory only where data are
