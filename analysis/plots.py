@@ -212,7 +212,8 @@ def trends(summary, parameter, observables, out, title=None, references=None, se
         if lo > 0 and hi / lo > 50:  # e.g. compression rates over decades
             ax.set_xscale("log")
         ax.set_ylabel(o)
-        ax.legend(fontsize=7)
+        if series is None or ax is axes[0][0]:  # many series: one legend
+            ax.legend(fontsize=7 if series is None else 6)
     if title:
         fig.suptitle(title, fontsize=10)
     _save(fig, out)

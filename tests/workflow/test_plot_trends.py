@@ -37,7 +37,7 @@ def test_deposits_draw_one_line_per_bond_number(tmp_path, monkeypatch):
         for bo in (0.0, 1000.0):
             for engine in ("pysim", "lammps"):
                 for obs, value in (("phi_deposit", 0.5 - bo * 1e-4), ("angle_mean", 25 + alpha),
-                                   ("k_ratio", 0.5 + bo * 1e-4)):
+                                   ("k_ratio", 0.5 + bo * 1e-4), ("settled", 1.0)):
                     rows.append(dict(study="dep", case=f"a{alpha}_b{bo}", engine=engine,
                                      seed=1, observable=obs, value=value, alpha=alpha,
                                      bond_number=bo))
@@ -46,13 +46,16 @@ def test_deposits_draw_one_line_per_bond_number(tmp_path, monkeypatch):
     figs = []
     monkeypatch.setattr(plots, "_save", lambda fig, out: figs.append(fig))
     assert plot_trends.main(["--summary", str(summary), "--study", "dep", "--parameter", "alpha",
-                             "--series", "bond_number", "--out", str(tmp_path / "t.png")]) == 0
+                             "--series", "bond_number", "--protocol", "deposit",
+                             "--out", str(tmp_path / "t.png")]) == 0
     axes = figs[0].axes
     assert [ax.get_ylabel() for ax in axes] == ["phi_deposit", "angle_mean", "k_ratio"]
+    # every deposit reports 'settled' (its settling test): no '<engine> settled' series
     for ax in axes:
-        labels = [t.get_text() for t in ax.get_legend().get_texts()]
+        labels = {ln.get_label() for ln in ax.get_lines()} | \
+            {c.get_label() for c in ax.containers}
         assert {"pysim, bond_number 0", "pysim, bond_number 1000", "lammps, bond_number 0",
-                "lammps, bond_number 1000"} <= set(labels)
+                "lammps, bond_number 1000"} <= labels
     refs = {ax.get_ylabel(): [ln.get_ydata()[0] for ln in ax.get_lines()
                               if ln.get_label().startswith("isotropic")] for ax in axes}
     assert refs["angle_mean"] == [pytest.approx(32.704, abs=1e-3)]

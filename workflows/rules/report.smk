@@ -86,10 +86,11 @@ rule plot_trends:
         parameter=lambda wc: _trend_parameter(wc.study),
         dimension=lambda wc: CFG["studies"][wc.study]["case"]["particles"].get("dimension", 3),
         series=lambda wc: _trend_series(wc.study),
+        protocol=lambda wc: CFG["studies"][wc.study]["case"]["protocol"]["name"],
     shell:
         "{PYTHON} -m workflows.scripts.plot_trends --summary {input} --study {wildcards.study}"
         " --parameter {params.parameter} --dimension {params.dimension} {params.series}"
-        " --out {output} 2> {log}"
+        " --protocol {params.protocol} --out {output} 2> {log}"
 
 
 rule plot_angles:

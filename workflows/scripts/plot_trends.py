@@ -62,13 +62,16 @@ def main(argv=None) -> int:
     ap.add_argument("--study", required=True)
     ap.add_argument("--parameter", required=True)
     ap.add_argument("--dimension", type=int, default=3)
+    ap.add_argument("--protocol", default=None,
+                    help="the study's protocol: deposits report 'settled' for their own runs")
     ap.add_argument("--series", default=None,
                     help="a second varying parameter (column) drawn as one line per value")
     ap.add_argument("--out", required=True, type=Path)
     a = ap.parse_args(argv)
     df = pd.read_csv(a.summary)
     df = df[df.study == a.study]
-    df = label_protocols(df)
+    if a.protocol != "deposit":  # there 'settled' is the settling test, no other protocol
+        df = label_protocols(df)
     plots.trends(df, a.parameter, OBSERVABLES + DEPOSIT_OBSERVABLES, a.out, title=a.study,
                  references=references(a.parameter, a.dimension), series=a.series)
     return 0
