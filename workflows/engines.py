@@ -934,23 +934,32 @@ def glued_wall_contacts(frame, table, cols, width: float):
     the fix ``wallx`` holds both x walls, told apart by the point), normal from the sphere
     to the wall, overlap ``R - distance``, point in the middle of the overlap. Returns a
     :class:`analysis.frame.Contacts`."""
-    from analysis.frame import Contacts
-
     c = {name: k for k, name in enumerate(cols)}
-    rows = []
-    for w, (fix, axis, far) in enumerate(GLUED_WALLS):
+    walls = []
+    for fix, axis, far in GLUED_WALLS:
         flag = table[:, c[f"f_{fix}[1]"]]
         force = table[:, [c[f"f_{fix}[{k}]"] for k in (2, 3, 4)]]
         wall = table[:, [c[f"f_{fix}[{k}]"] for k in (5, 6, 7)]]
-        side = wall[:, axis] > 0.5 * width
-        on = np.flatnonzero((flag > 0) & (side == far))
+        on = np.flatnonzero((flag > 0) & ((wall[:, axis] > 0.5 * width) == far))
+        walls.append((on, axis, far, np.abs(wall[on, axis] - frame.x[on, axis]), force[on]))
+    return _plane_wall_contacts(frame, walls)
+
+
+def _plane_wall_contacts(frame, walls):
+    """Sphere-wall rows of flat walls: ``walls`` lists, for wall id ``-(k + 1)``, ``(on,
+    axis, far, gap, force)``: the touching spheres (indices into ``frame``), the wall's
+    axis and side (``far``: at ``x = W``), each sphere's centre distance to the wall and
+    the wall's force on it. Normal from the sphere to the wall, overlap ``R - gap``, point
+    in the middle of the overlap. Returns a :class:`analysis.frame.Contacts`."""
+    from analysis.frame import Contacts
+
+    rows = []
+    for w, (on, axis, far, gap, force) in enumerate(walls):
         normal = np.zeros((len(on), 3))
         normal[:, axis] = 1.0 if far else -1.0
-        gap = np.abs(wall[on, axis] - frame.x[on, axis])
         overlap = frame.radius[on] - gap
         point = frame.x[on] + (frame.radius[on] - 0.5 * overlap)[:, None] * normal
-        rows.append((frame.ids[on], np.full(len(on), -(w + 1)), point, normal, overlap,
-                     force[on]))
+        rows.append((frame.ids[on], np.full(len(on), -(w + 1)), point, normal, overlap, force))
     i, j, point, normal, overlap, force = (np.concatenate(x) for x in zip(*rows))
     return Contacts(frame.step, i.astype(np.int64), j.astype(np.int64), point, normal, overlap,
                     force)
@@ -1031,23 +1040,14 @@ def multisphere_wall_contacts(frame, table, cols, width: float):
     :data:`MULTISPHERE_WALLS` (pysim's numbering: x = 0, x = W, y = 0, y = W, base), normal
     from the sphere to the wall, overlap ``R - distance``, point in the middle of the
     overlap, force on the sphere. Returns a :class:`analysis.frame.Contacts`."""
-    from analysis.frame import Contacts
-
     c = {name: k for k, name in enumerate(cols)}
-    rows = []
-    for w, (fix, axis, far) in enumerate(MULTISPHERE_WALLS):
+    walls = []
+    for fix, axis, far in MULTISPHERE_WALLS:
         force = table[:, [c[f"f_force_{fix}[{k}]"] for k in (1, 2, 3)]]
         on = np.flatnonzero(np.any(force != 0.0, axis=1))
-        normal = np.zeros((len(on), 3))
-        normal[:, axis] = 1.0 if far else -1.0
         gap = (width - frame.x[on, axis]) if far else frame.x[on, axis]
-        overlap = frame.radius[on] - gap
-        point = frame.x[on] + (frame.radius[on] - 0.5 * overlap)[:, None] * normal
-        rows.append((frame.ids[on], np.full(len(on), -(w + 1)), point, normal, overlap,
-                     force[on]))
-    i, j, point, normal, overlap, force = (np.concatenate(x) for x in zip(*rows))
-    return Contacts(frame.step, i.astype(np.int64), j.astype(np.int64), point, normal, overlap,
-                    force)
+        walls.append((on, axis, far, gap, force[on]))
+    return _plane_wall_contacts(frame, walls)
 
 
 def convert_multisphere_rods(native: Path, particles: Path, out_contacts: Path,

@@ -17,6 +17,16 @@ def linear_forces(contacts, k):
     return contacts
 
 
+def loaded_lattice(dim, a, k, m):
+    """A periodic cubic (square) lattice of ``m^d`` unit spheres (disks) at spacing ``a``
+    with linear repulsion ``k``: ``(frame, contacts)``."""
+    if dim == 3:
+        fr = frame_of(cubic(m, spacing=a) + 0.3, 0.5, [m * a] * 3)
+    else:
+        fr = frame_of(square(m, spacing=a) + [0.3, 0.3, 0.0], 0.5, [m * a, m * a, 1.0])
+    return fr, linear_forces(geometric_contacts(fr, 0.0), k)
+
+
 def virial_pressure(frame, contacts, dim):
     """P = (1 / (d V)) sum_pairs r_ij . f_ij with r_ij the centre separation and f_ij the
     repulsion along it (independent of the branch-vector bookkeeping)."""
@@ -31,13 +41,7 @@ def test_hydrostatic_lattice_is_isotropic_and_equals_the_virial_pressure(dim):
     """A cubic (square) lattice of unit spheres (disks) at spacing 0.98 with linear
     repulsion: sigma = -P I with P the virial pressure f / a^(d-1)."""
     a, k, m = 0.98, 1e4, 5
-    if dim == 3:
-        x = cubic(m, spacing=a) + 0.3
-        fr = frame_of(x, 0.5, [m * a] * 3)
-    else:
-        x = square(m, spacing=a) + [0.3, 0.3, 0.0]
-        fr = frame_of(x, 0.5, [m * a, m * a, 1.0])
-    c = linear_forces(geometric_contacts(fr, 0.0), k)
+    fr, c = loaded_lattice(dim, a, k, m)
     assert c.n == dim * m**dim
     f = k * (1 - a)
     p = virial_pressure(fr, c, dim)
@@ -160,13 +164,7 @@ def test_slab_stress_errors_are_the_spread_over_columns(dim):
     from analysis.stress import slab_stress_errors
 
     a, k, m = 0.98, 1e4, 8
-    if dim == 3:
-        x = cubic(m, spacing=a) + 0.3
-        fr = frame_of(x, 0.5, [m * a] * 3)
-    else:
-        x = square(m, spacing=a) + [0.3, 0.3, 0.0]
-        fr = frame_of(x, 0.5, [m * a, m * a, 1.0])
-    c = linear_forces(geometric_contacts(fr, 0.0), k)
+    fr, c = loaded_lattice(dim, a, k, m)
     v = fr.vertical
     edges = np.array([0.0, 2 * a, 5 * a, m * a])
     cols = 2 if dim == 3 else 4
