@@ -283,14 +283,15 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
       horizontal);
     * Janssen saturation fits ``sigma(x) = sigma_m (1 - exp(-x / h_s))``, ``x = depth /
       W``, of the vertical stress and of the pressure in slabs of thickness ``slab``
-      (compressive positive; fits over slabs with at least 3 grains, not the loose top
-      slab): ``sigma_m_vv``, ``h_s_vv`` with standard errors as uncertainties and
-      ``chi2_dof_vv``, the reduced chi-square of a fit weighted by the slab stresses'
-      standard errors (their spread over :data:`STRESS_COLUMNS` columns of the
-      container, :func:`analysis.stress.slab_stress_errors`), and ``sigma_m_p``,
-      ``h_s_p`` (unweighted); ``janssen_saturated`` 1 when the
-      fitted ``h_s`` lies within the depth of the data, else 0 and the fit values NaN (a
-      straight profile fixes only the slope ``sigma_m / h_s``);
+      (compressive positive; fits over slabs with at least 3 grains and a nonzero
+      spread over columns, not the loose top slab): ``sigma_m_vv``, ``h_s_vv`` with
+      standard errors as uncertainties and ``chi2_dof_vv``, the reduced chi-square of a
+      fit weighted by the slab stresses' standard errors (their spread over
+      :data:`STRESS_COLUMNS` columns of the container,
+      :func:`analysis.stress.slab_stress_errors`), and ``sigma_m_p``, ``h_s_p``
+      (unweighted); ``janssen_saturated`` 1 when the fitted ``h_s`` lies within the depth
+      of the data, else 0 and the fit values NaN (a straight profile fixes only the slope
+      ``sigma_m / h_s``);
     * ``k_ratio``: ``sigma_hh / sigma_vv`` averaged over the lower half of the deposit;
     * ``apparent_mass_fraction``: vertical force on the base over the deposit's weight
       (1 without wall friction; Janssen: below 1; grain ``density`` per volume, per area
@@ -298,10 +299,11 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
 
     Returns ``(rows, profile)``: rows ``(observable, value, uncertainty)`` and a table of
     the slab profile (``depth``, ``x``, ``phi``, ``sigma_vv``, ``sigma_hh``, ``pressure``,
-    ``count``, ``sigma_vv_err``, ``sigma_hh_err``, the fitted curves, and the Janssen apparent mass of every engine:
-    ``mass_above``, the grain mass above the slab centre, and ``apparent_mass`` =
-    ``sigma_vv W^(d-1) / g``, the part of it the grains below carry; equal without wall
-    friction, saturating with depth when the walls hold weight).
+    ``count``, ``sigma_vv_err``, ``sigma_hh_err``, the fitted curves, and the Janssen
+    apparent mass of every engine: ``mass_above``, the grain mass above the slab centre,
+    and ``apparent_mass`` = ``sigma_vv W^(d-1) / g``, the part of it the grains below
+    carry; equal without wall friction, saturating with depth when the walls hold
+    weight).
     """
     from analysis.janssen import JanssenFit, JanssenFitError, janssen
     from analysis.order import AngleToHorizontal
