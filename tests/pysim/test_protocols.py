@@ -174,3 +174,36 @@ def test_bisection_reopens_a_bracket_that_closes_far_above_the_target():
     # no lower bound yet: the middle of [0.9 hi, hi]
     assert next_trial({"lo": None, "hi": 0.87, "bisections": 0}, 1e-6, 1e-15, 50) == \
         pytest.approx(0.95 * 0.87)
+
+
+def test_relaxation_rounds_stop_once_balanced_to_balance_tol(tmp_path, monkeypatch):
+    """With an absolute force tolerance no minimiser can reach (1e-30), each relaxation
+    stops after its first FIRE round once every residual is below BALANCE_TOL of the
+    mean contact force, instead of running all RELAX_ROUNDS rounds of FIRE and L-BFGS:
+    L-BFGS is then never called, the state still jams on target and converges by its
+    residuals (force_balanced false)."""
+    from pysim import io
+    from pysim.protocols import jammed
+
+    calls = []
+    real = jammed.lbfgs
+
+    def counting(*args, **kwargs):
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(jammed, "lbfgs", counting)
+    case = validate_case({
+        "particles": {"n": 64, "dimension": 2,
+                      "diameter": {"distribution": "bidisperse", "mean": 1.0, "ratio": 1.4}},
+        "contact": {"law": "harmonic", "k_n": 1.0},
+        "protocol": {"name": "jammed", "phi_init": 0.4, "rate": 2e-3, "dt": 0.01,
+                     "force_tol": 1e-30, "max_bisections": 40},
+        "output": {"thermo_every": 500, "dump_every": 100000}, "seed": 5})
+    write_initial(case, tmp_path / "init.data")
+    res = jammed.run(case, io.read_particle_data(tmp_path / "init.data"), tmp_path / "out",
+                     progress=False)
+    assert calls == []
+    assert not res["force_balanced"]
+    assert max(res["force_residual_max"], res["torque_residual_max"]) < jammed.BALANCE_TOL
+    assert res["converged"]
