@@ -340,10 +340,17 @@ class Simulation:
         self._advance_clock(nsteps)
         self._check("overdamped Heun")
 
-    def minimize(self, f_tol: float, max_iter: int = 100_000, dt_max: float | None = None):
+    def minimize(self, f_tol: float, max_iter: int = 100_000, dt_max: float | None = None,
+                 until=None, check_every: int = 1000):
         """FIRE energy minimisation at fixed box until every force and torque is below
-        ``f_tol``. Returns ``(iterations, max |F|, max |tau|)``."""
+        ``f_tol``, or ``max_iter`` iterations. ``until(sim) -> bool``, when given, is
+        called every ``check_every`` iterations with forces, torques and energy current,
+        and a true answer stops the minimisation there (FIRE's velocities and step size
+        carry over between the checks). Returns ``(iterations, max |F|, max |tau|)``."""
         s = self.state
+        if check_every < 1:
+            raise ValueError(f"check_every must be a positive number of iterations, "
+                             f"got {check_every}")
         dt_max = 10.0 * self.dt if dt_max is None else dt_max
         fire = np.array([self.dt, 0.1, 0.0, dt_max, 0.02 * self.dt])
         sys = self.sys.copy()
@@ -354,20 +361,31 @@ class Simulation:
         s.omega[:] = 0.0
         saved_sys = self.sys
         self.sys = sys
-        self.compute_forces()  # also sets sys[SCATTER]
-        (*pairs, self._pe, self._nc, it, fmax, tmax) = itg.fire_chunk(
-            s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half, self.r_int,
-            s.mass, s.inertia, s.box, s.periodic, *self._pairs(), self.x_ref, self.u_ref,
-            self.box_ref, self.model.law_id, self._cp, self.planes, self.cyls, self._wp,
-            self.wall_force, sys, fire, int(max_iter), float(f_tol), self.virial)
-        self._set_pairs(pairs)
-        saved_sys[itg.RINT_BUILD:itg.RINT_BUILD + 1] = sys[itg.RINT_BUILD:itg.RINT_BUILD + 1]
-        saved_sys[itg.RC_BUILD:itg.HALF_BUILD + 1] = sys[itg.RC_BUILD:itg.HALF_BUILD + 1]
-        self.sys = saved_sys
-        s.v[:] = 0.0
-        s.omega[:] = 0.0
+        done = 0
+        try:
+            self.compute_forces()  # also sets sys[SCATTER]
+            while True:
+                chunk = int(max_iter) - done if until is None else min(check_every,
+                                                                       int(max_iter) - done)
+                (*pairs, self._pe, self._nc, it, fmax, tmax) = itg.fire_chunk(
+                    s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half,
+                    self.r_int, s.mass, s.inertia, s.box, s.periodic, *self._pairs(),
+                    self.x_ref, self.u_ref, self.box_ref, self.model.law_id, self._cp,
+                    self.planes, self.cyls, self._wp, self.wall_force, sys, fire, chunk,
+                    float(f_tol), self.virial)
+                self._set_pairs(pairs)
+                converged = fmax < f_tol and tmax < f_tol
+                done += int(it) if converged else chunk
+                if converged or done >= max_iter or (until is not None and until(self)):
+                    break
+        finally:
+            saved_sys[itg.RINT_BUILD:itg.RINT_BUILD + 1] = sys[itg.RINT_BUILD:itg.RINT_BUILD + 1]
+            saved_sys[itg.RC_BUILD:itg.HALF_BUILD + 1] = sys[itg.RC_BUILD:itg.HALF_BUILD + 1]
+            self.sys = saved_sys
+            s.v[:] = 0.0
+            s.omega[:] = 0.0
         self._check("FIRE")
-        return int(it), float(fmax), float(tmax)
+        return done, float(fmax), float(tmax)
 
     def rescale_particles(self, factor: float):
         """Scale every particle's ``R`` and ``L`` by ``factor`` at fixed centres, axes and

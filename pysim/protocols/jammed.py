@@ -8,7 +8,7 @@
 2. **Bisect the box size**: between the last unjammed packing fraction and the first
    jammed one, expand the box affinely from the jammed packing to the middle, relax,
    and move the bracket, until ``U/L^d`` lies within a factor 2 of ``energy_target``,
-   or the bracket is narrower than 1e-7 (opened again below the packing when that
+   or the bracket is narrower than :data:`PHI_TOL` (opened again below the packing when that
    still holds more than :data:`REOPEN_ENERGY`), or ``max_bisections`` is reached. Each
    relaxation runs FIRE and then, while forces are unbalanced, L-BFGS
    (:func:`pysim.minimize.lbfgs`), in up to :data:`RELAX_ROUNDS` rounds of ``max_relax``
@@ -54,15 +54,18 @@ def _energy_density(sim: Simulation, d_min: float) -> float:
     return sim.thermo().pe / (s.volume() / d_min**s.dimension)
 
 
-#: stop bisecting when the bracket on phi is this narrow
-PHI_TOL = 1e-7
+#: stop bisecting when the bracket on phi is this narrow: near jamming ``U/L^2`` is about
+#: ``0.2 (phi - phi_J)^2`` (2-D, N = 256, alpha 1), so the factor-2 window around the
+#: target 1e-15 is only some 5e-8 wide in phi; with a 1e-7 bracket a third of the quick
+#: profile's states closed at 2-3.5e-15, just outside it
+PHI_TOL = 1e-8
 #: a bracket that closes on a packing with more energy than this is opened again below
 #: it: with the harmonic law ``U/L^d`` is about ``(phi - phi_J)^2``, so such a packing is
-#: still ``10 PHI_TOL`` or more above its own jamming point, and the lower bound it closed
+#: still 1e-6 or more above its own jamming point, and the lower bound it closed
 #: on came from another packing (quick profile, alpha 0.12 seed 1: closed at U/L^2 =
 #: 8.8e-6 because expanding the first jammed packing by 4e-3 unjammed it, while the
 #: packing reached step by step from there stays jammed 1e-3 below the bound)
-REOPEN_ENERGY = (10 * PHI_TOL) ** 2
+REOPEN_ENERGY = 1e-12
 #: a packing is force-balanced when the minimisers reached ``force_tol`` or when every
 #: residual force and torque is below this fraction of the mean contact force and torque:
 #: at the target energy the absolute ``force_tol`` (1e-13 k_n / D) is some 4e-6 of the mean
@@ -73,6 +76,11 @@ BALANCE_TOL = 1e-3
 #: are not yet balanced is relaxed on, since with energy left it may still be sliding
 #: out of a jammed-looking state
 RELAX_ROUNDS = 5
+#: FIRE checks the early stops of a relaxation (energy below a quarter of the target, or
+#: every residual below :data:`BALANCE_TOL`) every this many iterations: checked only at
+#: the end of each ``max_relax`` round, a state balanced to 1e-3 early on went on to the
+#: absolute ``force_tol`` for up to 200 000 iterations (15 s per relaxation at N = 256)
+CHECK_EVERY = 1000
 #: L-BFGS iterations per round are ``max_relax`` over this: FIRE stalls on the
 #: ill-conditioned landscape near jamming (alpha 3, N = 1024: residual force 5 % of the
 #: mean contact force after 200 000 iterations), where 3000 L-BFGS iterations (3 s on one
@@ -203,23 +211,28 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
         """Relax until every force and torque is below ``f_tol``, in rounds (at most
         :data:`RELAX_ROUNDS`) of ``max_relax`` FIRE iterations, each followed, while
         the forces are unbalanced, by up to ``max_relax`` / :data:`LBFGS_SHARE` L-BFGS
-        iterations (:func:`pysim.minimize.lbfgs`); stops early once the energy is
+        iterations (:func:`pysim.minimize.lbfgs`); stops early (checked every
+        :data:`CHECK_EVERY` FIRE iterations and after each L-BFGS run) once the energy is
         below a quarter of the target (unjammed, whatever comes next) or every residual
         force and torque is below :data:`BALANCE_TOL` of the mean contact force and
         torque (balanced by the rule of :func:`is_converged`: further rounds only cost
         time; FIRE stalls near 1e-4 on some states). Returns ``U/L^d`` and whether the
         forces are balanced to ``f_tol``."""
+        def settled(t: Simulation) -> bool:
+            return _energy_density(t, d_min) < target / 4 or balanced_to_tol(t)
+
         for _ in range(RELAX_ROUNDS):
-            _, fmax, tmax = trial.minimize(f_tol=f_tol, max_iter=p["max_relax"])
+            _, fmax, tmax = trial.minimize(f_tol=f_tol, max_iter=p["max_relax"],
+                                           until=settled, check_every=CHECK_EVERY)
             e = _energy_density(trial, d_min)
             balanced = fmax < f_tol and tmax < f_tol
-            if balanced or e < target / 4 or balanced_to_tol(trial):
+            if balanced or settled(trial):
                 break
             with threadpool_limits(limits=1):  # BLAS threads only slow L-BFGS' vectors
                 _, fmax, tmax = lbfgs(trial, f_tol, max(1, p["max_relax"] // LBFGS_SHARE))
             e = _energy_density(trial, d_min)
             balanced = fmax < f_tol and tmax < f_tol
-            if balanced or e < target / 4 or balanced_to_tol(trial):
+            if balanced or settled(trial):
                 break
         return e, balanced
 

@@ -75,3 +75,29 @@ def test_lbfgs_refuses_what_has_no_energy():
         lbfgs(wall, 1e-10)
     with pytest.raises(ValueError, match="f_tol = 0"):
         lbfgs(sim, 0.0)
+
+
+def test_fire_checks_until_every_check_every_iterations():
+    """``Simulation.minimize(until=...)``: FIRE run in checked pieces follows the same
+    trajectory as in one piece (its velocities and step size carry over), and stops at
+    the first check that answers true, with velocities zeroed."""
+    import copy
+
+    sim = overlapping_rods(2, 40, 1.0, 0.95, 3, "end_bonds")
+    twin = copy.deepcopy(sim)
+    it, fmax, _ = sim.minimize(f_tol=1e-14, max_iter=2500)
+    calls = []
+    it2, fmax2, _ = twin.minimize(f_tol=1e-14, max_iter=2500, check_every=700,
+                                  until=lambda s: calls.append(s.state.step) or False)
+    assert it == it2 == 2500 and len(calls) == 3  # after 700, 1400, 2100; not at the end
+    np.testing.assert_array_equal(twin.state.x, sim.state.x)
+    np.testing.assert_array_equal(twin.state.u, sim.state.u)
+    assert fmax2 == fmax
+    stopped = copy.deepcopy(twin)
+    it3, _, _ = stopped.minimize(f_tol=1e-14, max_iter=2500, check_every=300,
+                                 until=lambda s: np.abs(s.f).max() < 10 * fmax)
+    assert it3 % 300 == 0 and 0 < it3 < 2500
+    assert np.abs(stopped.f).max() < 10 * fmax
+    assert not stopped.state.v.any() and not stopped.state.omega.any()
+    with pytest.raises(ValueError, match="check_every"):
+        stopped.minimize(f_tol=1e-14, until=lambda s: True, check_every=0)
