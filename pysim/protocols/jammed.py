@@ -152,6 +152,28 @@ def is_converged(result: dict, energy_target: float) -> bool:
     return _within_balance_tol(result)
 
 
+def relax(sim: Simulation, f_tol: float, max_relax: int, settled=balanced_to_tol) -> bool:
+    """Relax ``sim`` at fixed box until every force and torque is below ``f_tol``, in
+    rounds (at most :data:`RELAX_ROUNDS`) of ``max_relax`` FIRE iterations, each
+    followed, while the forces are unbalanced, by up to ``max_relax`` /
+    :data:`LBFGS_SHARE` L-BFGS iterations (:func:`pysim.minimize.lbfgs`); stops early
+    once ``settled(sim)`` holds (checked every :data:`CHECK_EVERY` FIRE iterations and
+    after each L-BFGS run). Returns whether the forces are balanced to ``f_tol``."""
+    balanced = False
+    for _ in range(RELAX_ROUNDS):
+        _, fmax, tmax = sim.minimize(f_tol=f_tol, max_iter=max_relax, until=settled,
+                                     check_every=CHECK_EVERY)
+        balanced = fmax < f_tol and tmax < f_tol
+        if balanced or settled(sim):
+            break
+        with threadpool_limits(limits=1):  # BLAS threads only slow L-BFGS' vectors
+            _, fmax, tmax = lbfgs(sim, f_tol, max(1, max_relax // LBFGS_SHARE))
+        balanced = fmax < f_tol and tmax < f_tol
+        if balanced or settled(sim):
+            break
+    return balanced
+
+
 def next_trial(drv: dict, e: float, target: float, max_bisections: int) -> float | None:
     """The bisection's next packing fraction, or ``None`` when it is done.
 
@@ -208,33 +230,17 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
         return e > target / 2 and backbone_fraction(trial) >= 0.5
 
     def relaxed_energy(trial: Simulation) -> tuple[float, bool]:
-        """Relax until every force and torque is below ``f_tol``, in rounds (at most
-        :data:`RELAX_ROUNDS`) of ``max_relax`` FIRE iterations, each followed, while
-        the forces are unbalanced, by up to ``max_relax`` / :data:`LBFGS_SHARE` L-BFGS
-        iterations (:func:`pysim.minimize.lbfgs`); stops early (checked every
-        :data:`CHECK_EVERY` FIRE iterations and after each L-BFGS run) once the energy is
-        below a quarter of the target (unjammed, whatever comes next) or every residual
-        force and torque is below :data:`BALANCE_TOL` of the mean contact force and
-        torque (balanced by the rule of :func:`is_converged`: further rounds only cost
-        time; FIRE stalls near 1e-4 on some states). Returns ``U/L^d`` and whether the
-        forces are balanced to ``f_tol``."""
+        """:func:`relax` the trial packing, stopping early once its energy is below a
+        quarter of the target (unjammed, whatever comes next) or every residual force
+        and torque is below :data:`BALANCE_TOL` of the mean contact force and torque
+        (balanced by the rule of :func:`is_converged`: further rounds only cost time;
+        FIRE stalls near 1e-4 on some states). Returns ``U/L^d`` and whether the forces
+        are balanced to ``f_tol``."""
         def settled(t: Simulation) -> bool:
             return _energy_density(t, d_min) < target / 4 or balanced_to_tol(t)
 
-        for _ in range(RELAX_ROUNDS):
-            _, fmax, tmax = trial.minimize(f_tol=f_tol, max_iter=p["max_relax"],
-                                           until=settled, check_every=CHECK_EVERY)
-            e = _energy_density(trial, d_min)
-            balanced = fmax < f_tol and tmax < f_tol
-            if balanced or settled(trial):
-                break
-            with threadpool_limits(limits=1):  # BLAS threads only slow L-BFGS' vectors
-                _, fmax, tmax = lbfgs(trial, f_tol, max(1, p["max_relax"] // LBFGS_SHARE))
-            e = _energy_density(trial, d_min)
-            balanced = fmax < f_tol and tmax < f_tol
-            if balanced or settled(trial):
-                break
-        return e, balanced
+        balanced = relax(trial, f_tol, p["max_relax"], settled)
+        return _energy_density(trial, d_min), balanced
 
     def record(sim_):
         files.thermo(sim_.thermo().row())
