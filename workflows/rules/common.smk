@@ -82,6 +82,11 @@ def get_final_output():
         if any(c["particles"].get("dimension", 3) == 2 and c["particles"]["aspect_ratio"] > 0
                for c in cases) and study not in tapping | deposit:
             out.append(f"{RESULTS}/{study}/figures/contact_angles.png")  # 2-D rods: P(varphi)
+        if protocol[study] == "jammed" and any(
+            c["particles"].get("dimension", 3) == 2 and c["contact"]["law"] == "harmonic"
+            for c in cases
+        ) and any(r.study == study and r.engine == "pysim" for r in RUNS):
+            out.append(f"{RESULTS}/{study}/figures/modes.png")  # dynamical matrix
         if (protocol[study] == "compress" and len({k[1] for k in CFG["_cases"] if k[0] == study}) > 1):
             out.append(f"{RESULTS}/{study}/figures/pressure_variants.png")  # p(phi) overlaid
     for study, variant in study_variants():

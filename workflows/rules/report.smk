@@ -112,6 +112,25 @@ rule plot_angles:
         "{PYTHON} -m workflows.scripts.plot_angles --runs {params.runs} --out {output} 2> {log}"
 
 
+rule plot_modes:
+    input:
+        lambda wc: [f"{d}/run.json" for d in run_dirs(wc.study) if d.endswith("/pysim")],
+    output:
+        figure=report(
+            f"{RESULTS}/{{study}}/figures/modes.png",
+            caption="../report/modes.rst",
+            category="{study}",
+        ),
+        table=f"{RESULTS}/{{study}}/modes.csv",
+    log:
+        f"{RESULTS}/{{study}}/figures/modes.log",
+    params:
+        runs=lambda wc: " ".join(d for d in run_dirs(wc.study) if d.endswith("/pysim")),
+    shell:
+        "{PYTHON} -m workflows.scripts.modes --runs {params.runs} --out {output.figure}"
+        " --table {output.table} 2> {log}"
+
+
 rule plot_pressures:
     input:
         lambda wc: [

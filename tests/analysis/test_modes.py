@@ -1,0 +1,102 @@
+"""The analytic Hessian of 2-D packings (:mod:`analysis.modes`) against finite differences
+of pysim's own forces and torques, on overlapping rods (end bonds) and disks; the
+gradient against the forces; translations as zero modes; the participation ratio and the
+mode character on modes built by hand."""
+import numpy as np
+import pytest
+
+from analysis import modes
+from analysis.frame import Frame
+from tests.pysim.test_minimize import overlapping_rods
+
+
+def frame_of(sim) -> Frame:
+    s = sim.state
+    return Frame.from_arrays(s.x, s.radius, s.box, axis=s.u, length=s.length,
+                             periodic=s.periodic, dimension=2)
+
+
+def fd_hessian(sim, dof, step=1e-7):
+    """Central differences of pysim's generalised forces ``(F_x, F_y, tau_z)``: the slow
+    reference."""
+    s = sim.state
+    x0, u0 = s.x.copy(), s.u.copy()
+
+    def q():
+        sim.compute_forces()
+        return np.where(dof[:, 1] < 2, sim.f[dof[:, 0], np.minimum(dof[:, 1], 1)],
+                        sim.torque[dof[:, 0], 2])
+
+    h = np.empty((len(dof), len(dof)))
+    for b, (i, c) in enumerate(dof):
+        out = []
+        for sign in (1.0, -1.0):
+            if c < 2:
+                s.x[i, c] = x0[i, c] + sign * step
+            else:
+                a = sign * step
+                s.u[i, 0] = u0[i, 0] * np.cos(a) - u0[i, 1] * np.sin(a)
+                s.u[i, 1] = u0[i, 0] * np.sin(a) + u0[i, 1] * np.cos(a)
+            out.append(q())
+            s.x[:] = x0
+            s.u[:] = u0
+        h[:, b] = -(out[0] - out[1]) / (2 * step)
+    sim.compute_forces()
+    return h
+
+
+@pytest.mark.parametrize("alpha, spine_contact", [(1.0, "end_bonds"), (0.0, "closest")])
+def test_hessian_matches_finite_differences_of_the_forces(alpha, spine_contact):
+    sim = overlapping_rods(2, 30, alpha, 0.9, 4, spine_contact)
+    frame = frame_of(sim)
+    ij, rec = sim.contact_table()
+    assert len(ij) > 20 and rec[:, 6].max() > 1e-2  # a dense, overlapping packing
+    dof = modes.dofs(frame)
+    assert len(dof) == (3 if alpha > 0 else 2) * 30
+    hk, hs, grad = modes.hessian_parts(frame, ij, dof, k_n=1.0, end_bonds=alpha > 0)
+    sim.compute_forces()
+    gen = np.where(dof[:, 1] < 2, sim.f[dof[:, 0], np.minimum(dof[:, 1], 1)],
+                   sim.torque[dof[:, 0], 2])
+    np.testing.assert_allclose(grad, -gen, atol=1e-12 * np.abs(gen).max())
+    h = hk + hs
+    ref = fd_hessian(sim, dof)
+    assert np.abs(h - ref).max() < 1e-6 * np.abs(ref).max()
+    np.testing.assert_allclose(h, h.T, atol=1e-12)
+    # the stress part carries the bond forces: it is of their order, the stiffness part of k_n
+    assert 0 < np.abs(hs).max() < 0.5 * np.abs(hk).max()
+    # rigid translations cost nothing in a periodic box
+    for c in (0, 1):
+        shift = (dof[:, 1] == c).astype(float)
+        assert np.abs(h @ shift).max() < 1e-12 * np.abs(h).max()
+
+
+def test_disk_stress_part_is_minus_force_over_distance_across_the_normal():
+    """Two overlapping disks: ``H_s`` on disk i is ``-(f/D)(1 - n n^T)``."""
+    frame = Frame.from_arrays([[0.0, 0.0], [0.9, 0.3]], [0.5, 0.5], [10.0, 10.0, 0.0],
+                              periodic=(True, True, False), dimension=2)
+    dof = modes.dofs(frame)
+    hk, hs, _ = modes.hessian_parts(frame, [[0, 1]], dof, k_n=2.0, end_bonds=False)
+    dist = np.hypot(0.9, 0.3)
+    n = np.array([0.9, 0.3]) / dist
+    f = 2.0 * (1.0 - dist) / 1.0**2
+    np.testing.assert_allclose(hs[:2, :2], -(f / dist) * (np.eye(2) - np.outer(n, n)),
+                               atol=1e-15)
+    np.testing.assert_allclose(hk[:2, :2], 2.0 * np.outer(n, n), atol=1e-15)
+    np.testing.assert_allclose(hs[:2, 2:], -hs[:2, :2], atol=1e-15)
+
+
+def test_participation_ratio_and_character_of_hand_built_modes():
+    dof = np.array([(0, 0), (0, 1), (0, 2), (1, 0), (1, 1), (1, 2)])
+    axis = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    one = np.zeros(6)
+    one[2] = 1.0  # rotation of particle 0 alone
+    spread = np.array([1.0, 0.0, 0.0, 1.0, 0.0, 0.0]) / np.sqrt(2)  # both move along x
+    vecs = np.column_stack([one, spread])
+    np.testing.assert_allclose(modes.participation_ratio(vecs, dof), [0.5, 1.0])
+    ch = modes.mode_character(vecs, dof, axis)
+    np.testing.assert_allclose(ch[0], [1.0, 0.0, 0.0])
+    # along x: parallel to particle 0's spine, perpendicular to particle 1's
+    np.testing.assert_allclose(ch[1], [0.0, 0.5, 0.5])
+    w2, v = modes.normal_modes(np.diag([4.0, 1.0, 9.0, 4.0, 1.0, 9.0]), np.array(
+        [1.0, 1.0, 9.0, 4.0, 4.0, 9.0]))
+    np.testing.assert_allclose(w2, [0.25, 1.0, 1.0, 1.0, 1.0, 4.0])

@@ -1,0 +1,184 @@
+"""Vibrational modes of the mechanically stable 2-D states of a study (protocol
+``jammed``, pysim runs): the Hessian of each final packing with its stiffness and stress
+parts (:mod:`analysis.modes`), written as a per-state summary and a per-mode table, and
+drawn as the density of states, the participation ratio and the rotational fraction
+against frequency.
+
+Each final frame (dumped with 10 digits, which unbalances forces of 1e-8 by some 1 %) is
+relaxed again at its box with pysim (:func:`pysim.protocols.jammed.relax`, to
+:data:`~pysim.protocols.jammed.BALANCE_TOL`) and rattlers are removed by science.md's
+2-D rule before the Hessian is built. Units: ``k_n = 1``, density 1 per area, smallest
+diameter 1.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from analysis import modes as am
+from analysis.contacts import remove_rattlers_2d
+from analysis.frame import Contacts, Frame
+from analysis.io import RunData
+from workflows.case import load_case
+
+#: |omega^2| below this fraction of the largest counts as a zero mode (rounding leaves
+#: the translations near 1e-16 of it; the softest stress-stabilised rod modes lie near 1e-9)
+ZERO = 1e-12
+
+
+def _frame_contacts(sim, step: int) -> tuple[Frame, Contacts]:
+    s = sim.state
+    ids = np.arange(1, s.n + 1)
+    frame = Frame.from_arrays(s.x, s.radius, s.box, axis=s.u, length=s.length,
+                              periodic=s.periodic, ids=ids, step=step, dimension=2)
+    ij, rec = sim.contact_table()
+    contacts = Contacts(step, ids[ij[:, 0]], ids[ij[:, 1]], rec[:, 0:3], rec[:, 3:6],
+                        rec[:, 6], rec[:, 7:10])
+    return frame, contacts
+
+
+def _zero(w2: np.ndarray, top: float) -> np.ndarray:
+    return np.abs(w2) < ZERO * top
+
+
+def stable_state_modes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
+    """Modes of the final frame of a ``jammed`` pysim run: a per-mode table (``omega``,
+    ``omega2``, ``pr``, the rotational / parallel / perpendicular fractions, and
+    ``omega_k`` of the stiffness part alone; each ascending) and a summary (particles
+    and degrees of freedom of the backbone, contact pairs, zero modes of ``H`` and of
+    ``H_k``, negative modes of ``H``, the largest stress-part entry relative to the
+    stiffness part's, the relaxed ``U/L^2`` and residuals)."""
+    from pysim.protocols import jammed
+    from pysim.protocols.compress import max_overlap, model_from_case, state_from_init
+    from pysim.simulation import Simulation
+
+    case = load_case(run_dir.parent / "case.yaml")
+    if case["particles"].get("dimension", 3) != 2 or case["protocol"]["name"] != "jammed":
+        raise ValueError(f"{run_dir}: modes are computed for 2-D 'jammed' runs, got "
+                         f"dimension {case['particles'].get('dimension', 3)}, protocol "
+                         f"{case['protocol']['name']!r}")
+    if case["contact"]["law"] != "harmonic":
+        raise ValueError(f"{run_dir}: modes need the harmonic law, got "
+                         f"{case['contact']['law']!r}")
+    frame, _ = RunData(run_dir).frames()[-1]
+    init = {"x": frame.x, "box": frame.box.copy(), "box_lo": frame.box_lo,
+            "axis": frame.axis, "radius": frame.radius, "length": frame.length}
+    state = state_from_init(case, init)
+    sim = Simulation(state, model_from_case(case), dt=case["protocol"]["dt"],
+                     skin=0.2 * 2.0 * float(np.max(state.radius)), check_dt=False,
+                     max_overlap=max_overlap(case))
+    d_min = float(2 * state.radius.min())
+    k_n = case["contact"]["k_n"]
+    jammed.relax(sim, case["protocol"]["force_tol"] * k_n / d_min, case["protocol"]["max_relax"])
+    res = jammed.residuals(sim)
+    fr, ct = _frame_contacts(sim, frame.step)
+    keep = ~remove_rattlers_2d(fr, ct)
+    a, b = fr.index_of(ct.i), fr.index_of(ct.j)
+    pairs = np.column_stack([a, b])[keep[a] & keep[b]]
+    dof = am.dofs(fr, keep)
+    end_bonds = (case["contact"].get("spine_contact", "closest") == "end_bonds"
+                 and bool(np.any(fr.length > 0)))
+    hk, hs, _ = am.hessian_parts(fr, pairs, dof, k_n=k_n, end_bonds=end_bonds)
+    masses = am.dof_masses(state.mass, state.inertia[:, 0], dof)
+    w2, vecs = am.normal_modes(hk + hs, masses)
+    wk2, _ = am.normal_modes(hk, masses)
+    table = pd.DataFrame(am.mode_table(w2, vecs, dof, fr.axis))
+    table["omega_k"] = np.sign(wk2) * np.sqrt(np.abs(wk2))
+    top = float(np.abs(w2).max())
+    summary = {"n_particles": int(keep.sum()), "n_dof": len(dof), "n_pairs": len(pairs),
+               "zero_modes": int(_zero(w2, top).sum()),
+               "zero_modes_stiffness": int(_zero(wk2, top).sum()),
+               "negative_modes": int(np.sum(w2 < -ZERO * top)),
+               "stress_over_stiffness": float(np.abs(hs).max() / np.abs(hk).max()),
+               "energy_density": float(sim.thermo().pe / (state.volume() / d_min**2)),
+               **res}
+    return table, summary
+
+
+def plot_modes(tables: dict, out: Path) -> None:
+    """Three panels against frequency, one line per variant (seeds pooled): the density
+    of states of ``H`` (solid) and of its stiffness part alone (dashed; zero modes fall
+    outside), the mean
+    participation ratio and the mean rotational fraction per frequency bin."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(1, 3, figsize=(14, 4.2))
+    # zero modes (translations, rods sliding between two flat contacts) are left out
+    top = max(float(t.omega.abs().max()) for t in tables.values())
+    positive = np.concatenate([t.omega[t.omega > np.sqrt(ZERO) * top]
+                               for t in tables.values()])
+    lo, hi = positive.min(), positive.max()
+    bins = np.logspace(np.log10(lo), np.log10(hi), 40)
+    mid = np.sqrt(bins[1:] * bins[:-1])
+    cmap = plt.get_cmap("viridis")
+    for k, (label, t) in enumerate(tables.items()):
+        colour = cmap(k / max(1, len(tables) - 1))
+        w = t.omega.to_numpy()
+        for col, style in (("omega", ".-"), ("omega_k", "--")):
+            hist, _ = np.histogram(t[col].to_numpy(), bins=bins)
+            hist = hist / (len(t) * np.diff(bins))  # per mode, zero modes included
+            ax[0].plot(mid, hist, style, color=colour, label=label if col == "omega" else None)
+        which = np.digitize(w, bins) - 1
+        ok = (which >= 0) & (which < len(mid))
+        for panel, col in ((1, "pr"), (2, "rotational")):
+            mean = pd.Series(t[col].to_numpy()[ok]).groupby(which[ok]).mean()
+            ax[panel].plot(mid[mean.index], mean.to_numpy(), ".-", color=colour, label=label)
+    ax[0].set(xscale="log", yscale="log", xlabel=r"$\omega$", ylabel=r"$D(\omega)$",
+              title="density of states (dashed: stiffness part alone)")
+    ax[1].set(xscale="log", xlabel=r"$\omega$", ylabel="participation ratio",
+              title="participation ratio")
+    ax[2].set(xscale="log", xlabel=r"$\omega$", ylabel="rotational fraction", ylim=(0, 1),
+              title="rotational character")
+    ax[0].legend(fontsize=7)
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(out.stem + ".tmp.png")
+    fig.savefig(tmp, dpi=120)
+    plt.close(fig)
+    tmp.replace(out)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--runs", nargs="+", type=Path, required=True,
+                    help="pysim run directories <study>/<variant>/seed<k>/pysim of 'jammed' runs")
+    ap.add_argument("--out", type=Path, required=True, help="figure (.png)")
+    ap.add_argument("--table", type=Path, required=True,
+                    help="per-state summary (.csv); the per-mode table goes beside it (.modes.csv.gz)")
+    a = ap.parse_args(argv)
+    from tqdm import tqdm
+
+    rows, per_mode, tables = [], [], {}
+    for run in tqdm(a.runs, desc="modes", unit="state"):
+        record = json.loads((run / "run.json").read_text())
+        if record.get("status") != "ok":
+            continue
+        table, summary = stable_state_modes(run)
+        variant, seed = run.parent.parent.name, run.parent.name
+        rows.append({"variant": variant, "seed": seed, **summary})
+        per_mode.append(table.assign(variant=variant, seed=seed))
+        tables.setdefault(variant, []).append(table)
+    if not rows:
+        raise SystemExit(f"no finished run among {len(a.runs)} to take modes of")
+    a.table.parent.mkdir(parents=True, exist_ok=True)
+    tmp = a.table.with_name(a.table.name + ".tmp")
+    pd.DataFrame(rows).to_csv(tmp, index=False)
+    tmp.replace(a.table)
+    modes_path = a.table.with_name(a.table.stem + ".modes.csv.gz")
+    tmp = modes_path.with_name(modes_path.name + ".tmp")
+    pd.concat(per_mode).to_csv(tmp, index=False, compression="gzip")
+    tmp.replace(modes_path)
+    plot_modes({v: pd.concat(t) for v, t in tables.items()}, a.out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
