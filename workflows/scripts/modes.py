@@ -125,12 +125,14 @@ def plot_modes(tables: dict, out: Path) -> None:
         for col, style in (("omega", ".-"), ("omega_k", "--")):
             hist, _ = np.histogram(t[col].to_numpy(), bins=bins)
             hist = hist / (len(t) * np.diff(bins))  # per mode, zero modes included
+            hist = np.where(hist > 0, hist, np.nan)  # gaps in the spectrum stay gaps
             ax[0].plot(mid, hist, style, color=colour, label=label if col == "omega" else None)
         which = np.digitize(w, bins) - 1
         ok = (which >= 0) & (which < len(mid))
         for panel, col in ((1, "pr"), (2, "rotational")):
             mean = pd.Series(t[col].to_numpy()[ok]).groupby(which[ok]).mean()
-            ax[panel].plot(mid[mean.index], mean.to_numpy(), ".-", color=colour, label=label)
+            mean = mean.reindex(range(len(mid)))  # empty bins: NaN, a break in the line
+            ax[panel].plot(mid, mean.to_numpy(), ".-", color=colour, label=label)
     ax[0].set(xscale="log", yscale="log", xlabel=r"$\omega$", ylabel=r"$D(\omega)$",
               title="density of states (dashed: stiffness part alone)")
     ax[1].set(xscale="log", xlabel=r"$\omega$", ylabel="participation ratio",

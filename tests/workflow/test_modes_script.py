@@ -1,0 +1,73 @@
+"""``workflows.scripts.modes`` on a small 2-D rod packing written as a finished pysim
+``jammed`` run: the per-state summary, the per-mode table and the figure."""
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from pysim import io
+from tests.pysim.test_minimize import overlapping_rods
+from workflows.case import validate_case
+from workflows.scripts import modes
+
+
+def fake_jammed_run(tmp_path, n=30, alpha=1.0, phi=0.9, seed=4):
+    """A run directory ``<variant>/seed1/pysim`` whose final frame is a packing of ``n``
+    rods squeezed to ``phi`` (overlapping, not yet relaxed: the script relaxes it)."""
+    case = validate_case({
+        "particles": {"n": n, "dimension": 2, "aspect_ratio": alpha,
+                      "diameter": {"distribution": "bidisperse", "mean": 1.0, "ratio": 1.4}},
+        "contact": {"law": "harmonic", "k_n": 1.0, "spine_contact": "end_bonds"},
+        "protocol": {"name": "jammed", "phi_init": 0.4, "rate": 1e-3, "dt": 0.01},
+        "output": {"thermo_every": 500, "dump_every": 100000}, "seed": seed})
+    seed_dir = tmp_path / f"alpha{alpha:g}" / "seed1"
+    run = seed_dir / "pysim"
+    run.mkdir(parents=True)
+    (seed_dir / "case.yaml").write_text(yaml.safe_dump(case))
+    sim = overlapping_rods(2, n, alpha, phi, seed, "end_bonds")
+    s = sim.state
+    ids = np.arange(1, n + 1)
+    box = s.box.copy()
+    with open(run / "particles.dump", "w") as fh:
+        io.write_particles_frame(fh, 0, box, s.periodic, ids, np.ones(n, int), s.x, s.radius,
+                                 s.u, s.length)
+    ij, rec = sim.contact_table()
+    with open(run / "contacts.dump", "w") as fh:
+        io.write_contacts_frame(fh, 0, box, s.periodic, ids[ij], rec)
+    (run / "run.json").write_text(json.dumps({"status": "ok"}))
+    return run
+
+
+def test_modes_of_a_relaxed_rod_packing(tmp_path):
+    run = fake_jammed_run(tmp_path)
+    table, summary = modes.stable_state_modes(run)
+    assert summary["n_dof"] == 3 * summary["n_particles"] == len(table)
+    # relaxed to a minimum: no negative mode, the two translations among the zero modes,
+    # and the stress part never creates zero modes (H_k has at least as many)
+    assert summary["negative_modes"] == 0
+    assert summary["zero_modes"] >= 2
+    assert summary["zero_modes_stiffness"] >= summary["zero_modes"]
+    assert summary["force_residual_max"] < 1e-3
+    assert table.omega2.is_monotonic_increasing
+    assert table.pr.between(0, 1).all()
+    fractions = table[["rotational", "parallel", "perpendicular"]].sum(axis=1)
+    np.testing.assert_allclose(fractions, 1.0, atol=1e-9)
+    out = tmp_path / "figures" / "modes.png"
+    assert modes.main(["--runs", str(run), "--out", str(out),
+                       "--table", str(tmp_path / "modes.csv")]) == 0
+    assert out.stat().st_size > 10_000
+    rows = pd.read_csv(tmp_path / "modes.csv")
+    assert list(rows.variant) == ["alpha1"] and rows.n_dof.iloc[0] == summary["n_dof"]
+    per_mode = pd.read_csv(tmp_path / "modes.modes.csv.gz")
+    assert len(per_mode) == summary["n_dof"]
+
+
+def test_modes_refuse_another_contact_law(tmp_path):
+    run = fake_jammed_run(tmp_path)
+    case = yaml.safe_load((run.parent / "case.yaml").read_text())
+    case["contact"]["law"] = "hooke"
+    (run.parent / "case.yaml").write_text(yaml.safe_dump(case))
+    with pytest.raises(ValueError, match="harmonic law, got 'hooke'"):
+        modes.stable_state_modes(run)
