@@ -94,7 +94,9 @@ def kink_contacts(frame: Frame, contacts: Contacts, kink_tol: float = 1.0,
 
 
 class ForceBalance(Observable):
-    """Residual forces and torques of the rattler-free backbone (see the module doc).
+    """Residual forces and torques of the rattler-free backbone (see the module doc):
+    the net load of every contact on each backbone particle, contacts with rattlers
+    included, relative to the mean force of the pair contacts that touch the backbone.
 
     Parameters: ``split_parallel`` (default True) also solves for the placement of the
     forces of kinked parallel side-side contacts; ``kink_tol`` (:func:`kink_contacts`);
@@ -126,7 +128,7 @@ class ForceBalance(Observable):
         pp, _ = split_wall_contacts(frame, contacts)
         a = frame.index_of(pp.i)
         b = frame.index_of(pp.j)
-        live = keep[a] & keep[b]
+        live = keep[a] | keep[b]  # pair contacts that load the backbone
         fmag = np.linalg.norm(pp.force, axis=1)[live]
         if not keep.any() or len(fmag) == 0 or fmag.mean() == 0:
             self._set(force=np.full(frame.n, nan), torque=np.full(frame.n, nan),
@@ -134,17 +136,15 @@ class ForceBalance(Observable):
                       torque_split_mean=nan, torque_split_max=nan, n_kink=0,
                       mean_force=0.0, n_backbone=int(keep.sum()))
             return self
-        # balance among backbone particles: drop contacts with rattlers
-        on = np.ones(contacts.n, bool)
-        wall_row = contacts.j <= 0
-        idx_i = frame.index_of(contacts.i)
-        idx_j = np.where(wall_row, 0, contacts.j)
-        on &= keep[idx_i]
-        on[~wall_row] &= keep[frame.index_of(idx_j[~wall_row])]
-        table = contacts.subset(on)
+        # every contact loads its particles, a rattler's too: the rattler rule may
+        # remove a particle that carries two opposite forces (2-D: a rod with two
+        # contacts not both on its flat sides), and without them its neighbours would
+        # look unbalanced (a stable 2-D rod state showed 1.9 times the mean force)
+        table = contacts
         f, t = net_loads(frame, table)
         mean_f = float(fmag.mean())
-        mean_t = float((fmag * frame.radius[a[live]]).mean())
+        lever = np.where(keep[a], frame.radius[a], frame.radius[b])[live]
+        mean_t = float((fmag * lever).mean())
         fr = np.where(keep, np.linalg.norm(f, axis=1) / mean_f, nan)
         tr = np.where(keep, np.linalg.norm(t, axis=1) / mean_t, nan)
         split_mean = split_max = nan

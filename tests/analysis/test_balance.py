@@ -85,3 +85,22 @@ def test_rattlers_are_left_out_and_empty_tables_give_nan():
     assert fb.n_backbone == 0 and np.isnan(fb.force_mean)
     with pytest.raises(ValueError, match="kink_tol"):
         ForceBalance(kink_tol=-1.0)
+
+
+def test_a_rattler_that_carries_force_still_loads_its_neighbours():
+    """Spheres A, B, C in a column, A and C held by three wall rows each: B has two
+    contacts, so with ``c_min = 3`` it is a rattler, yet it carries the force from A to C.
+    A and C are balanced only with B's contacts counted."""
+    d = 0.999
+    fr = Frame.from_arrays([[0, 0, 0], [0, d, 0], [0, 2 * d, 0]], 0.5, [20.0, 20.0, 20.0])
+    f = 1.0
+    xs = (-0.2, 0.0, 0.2)
+    c = table([1, 2] + [1] * 3 + [3] * 3, [2, 3] + [-1] * 3 + [-2] * 3,
+              [[0, d / 2, 0], [0, 1.5 * d, 0]] + [[x, -0.5, 0] for x in xs]
+              + [[x, 2 * d + 0.5, 0] for x in xs],
+              [[0, -f, 0], [0, -f, 0]] + [[0, f / 3, 0]] * 3 + [[0, -f / 3, 0]] * 3)
+    fb = ForceBalance(c_min=3, split_parallel=False).compute(fr, c)
+    assert fb.n_backbone == 2 and np.isnan(fb.force[1])
+    assert fb.mean_force == pytest.approx(f)
+    assert fb.force_max == pytest.approx(0.0, abs=1e-12)
+    assert fb.torque_max == pytest.approx(0.0, abs=1e-12)
