@@ -102,6 +102,13 @@ def test_jammed_disks_by_box_bisection(tmp_path):
     f, c = RunData(out).frames()[-1]
     cn = ContactNumber().compute(f, c)
     assert 3.6 < cn.z_rattler_free < 4.4  # isostatic 2 d = 4, up to finite-size terms
+    # the same state at full precision beside the 10-digit dumps
+    from pysim import checkpoint
+    from pysim.protocols.jammed import STABLE_STATE
+
+    exact = checkpoint.load(out / STABLE_STATE)[0]
+    assert exact.state.packing_fraction() == res["phi_j"]
+    np.testing.assert_allclose(exact.state.x, f.x - f.box_lo, rtol=1e-9, atol=1e-8)
 
 
 def test_jammed_reports_unbalanced_forces_as_not_converged(tmp_path):

@@ -43,6 +43,7 @@ def fake_jammed_run(tmp_path, n=30, alpha=1.0, phi=0.9, seed=4):
 def test_modes_of_a_relaxed_rod_packing(tmp_path):
     run = fake_jammed_run(tmp_path)
     table, summary = modes.stable_state_modes(run)
+    assert not summary["exact"]  # no stable_state.npz: read from the dump
     assert summary["n_dof"] == 3 * summary["n_particles"] == len(table)
     # relaxed to a minimum: no negative mode, the two translations among the zero modes,
     # and the stress part never creates zero modes (H_k has at least as many)
@@ -62,6 +63,19 @@ def test_modes_of_a_relaxed_rod_packing(tmp_path):
     assert list(rows.variant) == ["alpha1"] and rows.n_dof.iloc[0] == summary["n_dof"]
     per_mode = pd.read_csv(tmp_path / "modes.modes.csv.gz")
     assert len(per_mode) == summary["n_dof"]
+
+
+def test_modes_read_the_full_precision_state_when_there_is_one(tmp_path):
+    from pysim import checkpoint
+    from pysim.protocols.jammed import STABLE_STATE
+
+    run = fake_jammed_run(tmp_path)
+    sim = overlapping_rods(2, 30, 1.0, 0.9, 4, "end_bonds")
+    sim.minimize(f_tol=1e-12, max_iter=50_000)
+    checkpoint.save(sim, run / STABLE_STATE)
+    _, summary = modes.stable_state_modes(run)
+    assert summary["exact"] and summary["negative_modes"] == 0
+    assert summary["force_residual_max"] < 1e-3
 
 
 def test_modes_refuse_another_contact_law(tmp_path):

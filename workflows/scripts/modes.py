@@ -4,10 +4,12 @@ parts (:mod:`analysis.modes`), written as a per-state summary and a per-mode tab
 drawn as the density of states, the participation ratio and the rotational fraction
 against frequency.
 
-Each final frame (dumped with 10 digits, which unbalances forces of 1e-8 by some 1 %) is
-relaxed again at its box with pysim (:func:`pysim.protocols.jammed.relax`, to
-:data:`~pysim.protocols.jammed.BALANCE_TOL`) and rattlers are removed by science.md's
-2-D rule before the Hessian is built. Units: ``k_n = 1``, density 1 per area, smallest
+Each final state is read at full precision (``stable_state.npz``; older runs only have
+the 10-digit final frame, which unbalances forces of 1e-8 by some 1 % and can open the
+shallowest contacts), relaxed again at its box with pysim
+(:func:`pysim.protocols.jammed.relax`, to :data:`~pysim.protocols.jammed.BALANCE_TOL`;
+nothing to do for an exact state) and rattlers are removed by science.md's 2-D rule
+before the Hessian is built. Units: ``k_n = 1``, density 1 per area, smallest
 diameter 1.
 """
 from __future__ import annotations
@@ -52,7 +54,9 @@ def stable_state_modes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
     ``omega_k`` of the stiffness part alone; each ascending) and a summary (particles
     and degrees of freedom of the backbone, contact pairs, zero modes of ``H`` and of
     ``H_k``, negative modes of ``H``, the largest stress-part entry relative to the
-    stiffness part's, the relaxed ``U/L^2`` and residuals)."""
+    stiffness part's, the relaxed ``U/L^2`` and residuals, and ``exact``: whether the
+    full-precision state was read)."""
+    from pysim import checkpoint
     from pysim.protocols import jammed
     from pysim.protocols.compress import max_overlap, model_from_case, state_from_init
     from pysim.simulation import Simulation
@@ -65,18 +69,24 @@ def stable_state_modes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
     if case["contact"]["law"] != "harmonic":
         raise ValueError(f"{run_dir}: modes need the harmonic law, got "
                          f"{case['contact']['law']!r}")
-    frame, _ = RunData(run_dir).frames()[-1]
-    init = {"x": frame.x, "box": frame.box.copy(), "box_lo": frame.box_lo,
-            "axis": frame.axis, "radius": frame.radius, "length": frame.length}
-    state = state_from_init(case, init)
-    sim = Simulation(state, model_from_case(case), dt=case["protocol"]["dt"],
-                     skin=0.2 * 2.0 * float(np.max(state.radius)), check_dt=False,
-                     max_overlap=max_overlap(case))
+    exact = run_dir / jammed.STABLE_STATE
+    if exact.exists():
+        sim = checkpoint.load(exact)[0]
+        step = sim.state.step
+    else:  # runs before the full-precision state was kept: the 10-digit final frame
+        frame, _ = RunData(run_dir).frames()[-1]
+        init = {"x": frame.x, "box": frame.box.copy(), "box_lo": frame.box_lo,
+                "axis": frame.axis, "radius": frame.radius, "length": frame.length}
+        sim = Simulation(state_from_init(case, init), model_from_case(case),
+                         dt=case["protocol"]["dt"], skin=0.2 * 2.0 * float(np.max(frame.radius)),
+                         check_dt=False, max_overlap=max_overlap(case))
+        step = frame.step
+    state = sim.state
     d_min = float(2 * state.radius.min())
     k_n = case["contact"]["k_n"]
     jammed.relax(sim, case["protocol"]["force_tol"] * k_n / d_min, case["protocol"]["max_relax"])
     res = jammed.residuals(sim)
-    fr, ct = _frame_contacts(sim, frame.step)
+    fr, ct = _frame_contacts(sim, step)
     keep = ~remove_rattlers_2d(fr, ct)
     a, b = fr.index_of(ct.i), fr.index_of(ct.j)
     pairs = np.column_stack([a, b])[keep[a] & keep[b]]
@@ -96,7 +106,7 @@ def stable_state_modes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
                "negative_modes": int(np.sum(w2 < -ZERO * top)),
                "stress_over_stiffness": float(np.abs(hs).max() / np.abs(hk).max()),
                "energy_density": float(sim.thermo().pe / (state.volume() / d_min**2)),
-               **res}
+               "exact": exact.exists(), **res}
     return table, summary
 
 
