@@ -165,7 +165,12 @@ def relax(sim: Simulation, f_tol: float, max_relax: int, settled=balanced_to_tol
     followed, while the forces are unbalanced, by up to ``max_relax`` /
     :data:`LBFGS_SHARE` L-BFGS iterations (:func:`pysim.minimize.lbfgs`); stops early
     once ``settled(sim)`` holds (checked every :data:`CHECK_EVERY` FIRE iterations and
-    after each L-BFGS run). Returns whether the forces are balanced to ``f_tol``."""
+    after each L-BFGS run, and before anything runs: a settled state is left as it is).
+    Returns whether the forces are balanced to ``f_tol``."""
+    sim.compute_forces()
+    if settled(sim):
+        return bool(max(np.linalg.norm(sim.f, axis=1).max(),
+                        np.linalg.norm(sim.torque, axis=1).max()) < f_tol)
     balanced = False
     for _ in range(RELAX_ROUNDS):
         _, fmax, tmax = sim.minimize(f_tol=f_tol, max_iter=max_relax, until=settled,

@@ -36,7 +36,7 @@ def fake_jammed_run(tmp_path, n=30, alpha=1.0, phi=0.9, seed=4):
     ij, rec = sim.contact_table()
     with open(run / "contacts.dump", "w") as fh:
         io.write_contacts_frame(fh, 0, box, s.periodic, ids[ij], rec)
-    (run / "run.json").write_text(json.dumps({"status": "ok"}))
+    (run / "run.json").write_text(json.dumps({"status": "ok", "converged": True}))
     return run
 
 

@@ -171,7 +171,10 @@ def main(argv=None) -> int:
     rows, per_mode, tables = [], [], {}
     for run in tqdm(a.runs, desc="modes", unit="state"):
         record = json.loads((run / "run.json").read_text())
-        if record.get("status") != "ok":
+        if record.get("status") != "ok" or not record.get("converged", False):
+            # an unconverged state is no stable state: its modes would mislead
+            sys.stderr.write(f"modes: skipping {run} (status {record.get('status')}, "
+                             f"converged {record.get('converged')})\n")
             continue
         table, summary = stable_state_modes(run)
         variant, seed = run.parent.parent.name, run.parent.name
