@@ -191,7 +191,14 @@ def main(argv=None) -> int:
     tmp = modes_path.with_name(modes_path.name + ".tmp")
     pd.concat(per_mode).to_csv(tmp, index=False, compression="gzip")
     tmp.replace(modes_path)
-    plot_modes({v: pd.concat(t) for v, t in tables.items()}, a.out)
+    def by_value(variant: str) -> tuple:  # alpha0.5 before alpha1, not after alpha0.25
+        digits = "".join(ch for ch in variant if ch.isdigit() or ch == ".")
+        try:
+            return (0, float(digits), variant)
+        except ValueError:
+            return (1, 0.0, variant)
+
+    plot_modes({v: pd.concat(tables[v]) for v in sorted(tables, key=by_value)}, a.out)
     return 0
 
 
