@@ -140,8 +140,7 @@ class ForceBalance(Observable):
         # remove a particle that carries two opposite forces (2-D: a rod with two
         # contacts not both on its flat sides), and without them its neighbours would
         # look unbalanced (a stable 2-D rod state showed 1.9 times the mean force)
-        table = contacts
-        f, t = net_loads(frame, table)
+        f, t = net_loads(frame, contacts)
         mean_f = float(fmag.mean())
         lever = np.where(keep[a], frame.radius[a], frame.radius[b])[live]
         mean_t = float((fmag * lever).mean())
@@ -150,7 +149,7 @@ class ForceBalance(Observable):
         split_mean = split_max = nan
         n_kink = 0
         if self.split_parallel:
-            pp_on, _ = split_wall_contacts(frame, table)
+            pp_on, _ = split_wall_contacts(frame, contacts)
             rows, s_lo, s_hi = kink_contacts(frame, pp_on, self.kink_tol)
             n_kink = len(rows)
             t2 = t.copy()

@@ -81,11 +81,12 @@ def state_from_init(case: dict, init: dict) -> State:
                         periodic=(True, True, dim == 3), dimension=dim)
 
 
-def simulation_from_case(case: dict, init: dict) -> Simulation:
-    """Build the :class:`Simulation` a compression case describes."""
+def simulation_from_case(case: dict, init: dict, check_dt: bool = True) -> Simulation:
+    """Build the :class:`Simulation` a compression case describes (``check_dt``: refuse a
+    time step too large for the contact time; off for overdamped and minimising drivers)."""
     state = state_from_init(case, init)
     return Simulation(state, model_from_case(case), dt=case["protocol"]["dt"],
-                      skin=0.2 * 2.0 * float(np.max(state.radius)),
+                      skin=0.2 * 2.0 * float(np.max(state.radius)), check_dt=check_dt,
                       max_overlap=max_overlap(case))
 
 

@@ -44,12 +44,12 @@ from tqdm import tqdm
 
 from pysim import checkpoint, io
 from pysim.minimize import lbfgs
-from pysim.protocols.compress import max_overlap, model_from_case, state_from_init
+from pysim.protocols.compress import simulation_from_case
 from pysim.protocols.output import RunFiles
 from pysim.simulation import BlowUpError, Simulation
 
 
-def _energy_density(sim: Simulation, d_min: float) -> float:
+def energy_density(sim: Simulation, d_min: float) -> float:
     """Elastic energy per box area (volume in 3-D), lengths in units of ``d_min``."""
     s = sim.state
     return sim.thermo().pe / (s.volume() / d_min**s.dimension)
@@ -219,10 +219,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     if resume:
         sim, drv = files.resume()
     else:
-        state = state_from_init(case, init)
-        sim = Simulation(state, model_from_case(case), dt=p["dt"],
-                         skin=0.2 * 2.0 * float(np.max(state.radius)), check_dt=False,
-                         max_overlap=max_overlap(case))
+        sim = simulation_from_case(case, init, check_dt=False)
         files.start()
         drv = {"phase": "compress", "lo": None, "hi": None, "bisections": 0}
     s = sim.state
@@ -249,10 +246,10 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
         FIRE stalls near 1e-4 on some states). Returns ``U/L^d`` and whether the forces
         are balanced to ``f_tol``."""
         def settled(t: Simulation) -> bool:
-            return _energy_density(t, d_min) < target / 4 or balanced_to_tol(t)
+            return energy_density(t, d_min) < target / 4 or balanced_to_tol(t)
 
         balanced = relax(trial, f_tol, p["max_relax"], settled)
-        return _energy_density(trial, d_min), balanced
+        return energy_density(trial, d_min), balanced
 
     def record(sim_):
         files.thermo(sim_.thermo().row())
@@ -286,7 +283,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
             files.checkpoint(sim, drv)
         while drv["phase"] == "bisect":
             # sim holds the jammed packing at phi_hi; bisect from it towards phi_lo
-            goal = next_trial(drv, _energy_density(sim, d_min), target, p["max_bisections"])
+            goal = next_trial(drv, energy_density(sim, d_min), target, p["max_bisections"])
             if goal is None:
                 drv["phase"] = "done"
                 break
@@ -310,7 +307,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     finally:
         bar.close()
         files.close()
-    e = _energy_density(sim, d_min)
+    e = energy_density(sim, d_min)
     balanced = bool(drv.get("balanced", False))
     result = {"phi_j": s.packing_fraction(), "energy_density": e, "converged": False,
               "force_balanced": balanced, "bisections": drv["bisections"],

@@ -58,8 +58,7 @@ def stable_state_modes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
     full-precision state was read)."""
     from pysim import checkpoint
     from pysim.protocols import jammed
-    from pysim.protocols.compress import max_overlap, model_from_case, state_from_init
-    from pysim.simulation import Simulation
+    from pysim.protocols.compress import simulation_from_case
 
     case = load_case(run_dir.parent / "case.yaml")
     if case["particles"].get("dimension", 3) != 2 or case["protocol"]["name"] != "jammed":
@@ -77,9 +76,7 @@ def stable_state_modes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
         frame, _ = RunData(run_dir).frames()[-1]
         init = {"x": frame.x, "box": frame.box.copy(), "box_lo": frame.box_lo,
                 "axis": frame.axis, "radius": frame.radius, "length": frame.length}
-        sim = Simulation(state_from_init(case, init), model_from_case(case),
-                         dt=case["protocol"]["dt"], skin=0.2 * 2.0 * float(np.max(frame.radius)),
-                         check_dt=False, max_overlap=max_overlap(case))
+        sim = simulation_from_case(case, init, check_dt=False)
         step = frame.step
     state = sim.state
     d_min = float(2 * state.radius.min())
@@ -105,7 +102,7 @@ def stable_state_modes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
                "zero_modes_stiffness": int(_zero(wk2, top).sum()),
                "negative_modes": int(np.sum(w2 < -ZERO * top)),
                "stress_over_stiffness": float(np.abs(hs).max() / np.abs(hk).max()),
-               "energy_density": float(sim.thermo().pe / (state.volume() / d_min**2)),
+               "energy_density": jammed.energy_density(sim, d_min),
                "exact": exact.exists(), **res}
     return table, summary
 
