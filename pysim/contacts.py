@@ -224,7 +224,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
     nothing, so the results are the same bits, and listed rods that stay out of reach
     skip the closest-point search.
 
-    ``scatter`` (one thread only: the rows must run in order) adds the reactions straight
+    ``scatter`` (the rows run in order, on one thread) adds the reactions straight
     to ``f``/``torque`` of the second particle instead of storing them in ``fj``: when row
     ``i`` is reached its reactions are complete, and it writes ``f_i = row sum + reaction
     sum``, the same bits as :func:`reduce_pass` gives (no ``reduce_pass`` gather needed)."""
@@ -240,8 +240,13 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
     blk = np.zeros((nb if stats else 0, _STATS))
     if scatter:
         _zero(f, torque)
-    for b in prange(nb):
-        for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
+    # with scatter one loop iteration holds every row, so the rows run in order on one
+    # thread whatever the number of threads (a race otherwise)
+    nt = 1 if scatter else nb
+    for t in prange(nt):
+        i_end = n if scatter else min(n, (t + 1) * BLOCK)
+        for i in range(0 if scatter else t * BLOCK, i_end):
+            b = i // BLOCK
             xi0, xi1, xi2 = x[i, 0], x[i, 1], x[i, 2]
             ui0, ui1, ui2 = u[i, 0], u[i, 1], u[i, 2]
             vi0, vi1, vi2 = v[i, 0], v[i, 1], v[i, 2]
