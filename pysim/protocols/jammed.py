@@ -6,16 +6,19 @@
    ``thermo_every`` steps; the compression stops at the first packing whose relaxed
    elastic energy per area ``U/L^d`` exceeds ``energy_target`` (jammed).
 2. **Bisect the box size**: between the last unjammed packing fraction and the first
-   jammed one, expand the box affinely from the jammed packing to the middle, relax,
-   and move the bracket, until ``U/L^d`` lies within a factor 2 of ``energy_target``,
-   or the bracket is narrower than :data:`PHI_TOL` (opened again below the packing when that
-   still holds more than :data:`REOPEN_ENERGY`), or ``max_bisections`` is reached. Each
-   relaxation runs FIRE and then, while forces are unbalanced, L-BFGS
-   (:func:`pysim.minimize.lbfgs`), in up to :data:`RELAX_ROUNDS` rounds of ``max_relax``
-   FIRE iterations: a packing left with unbalanced forces and some energy may still be
-   sliding towards an unjammed state, and taken as jammed it stalls the bisection (at
-   N = 1024 such a state at U/L^2 = 2e-9 unjammed on every expansion until the bracket
-   closed). A relaxed packing counts as jammed when its energy
+   jammed one, rescale the box affinely to the middle, relax, and move the bracket. Each
+   trial starts from the packing of the trial before, as in O'Hern et al. (2003): a
+   jammed one is expanded, an unjammed one compressed. (Expanding only the jammed
+   packing stalled where every expansion of it unjams: the bracket closed on it at
+   U/L^2 = 4e-6 in a 64-rod test.) The bisection ends when ``U/L^d`` lies within a
+   factor 2 of ``energy_target``, or the bracket is narrower than :data:`PHI_TOL` (opened
+   again above the unjammed packing when the jammed one still holds more than
+   :data:`REOPEN_ENERGY`: they lie in different basins), or ``max_bisections`` is reached. Each
+   relaxation (:func:`relax`) runs FIRE and L-BFGS (:func:`pysim.minimize.lbfgs`) in
+   rounds until the energy has stopped falling: a packing with small residual forces
+   may still be sliding towards an unjammed state, and taken as jammed it stalls the
+   bisection (at N = 1024 such a state at U/L^2 = 2e-9 unjammed on every expansion until
+   the bracket closed). A relaxed packing counts as jammed when its energy
    density exceeds half the target *and* a contact backbone (particles with at least
    ``d + 1`` contacts, others removed iteratively) holds at least half the particles: rods can
    stay caught on the kink of the spine-distance law with tiny overlaps below jamming.
@@ -24,9 +27,10 @@ The final packing is the mechanically stable state: its frame is the last of
 ``particles.dump``/``contacts.dump`` (10 digits), ``stable_state.npz`` holds it at full
 precision (a :mod:`pysim.checkpoint`), and ``jammed.json`` records ``phi_j``, ``U/L^d``,
 whether the minimisers balanced its forces to ``force_tol`` (``force_balanced``), the
-number of bisections, the residual forces and torques relative to the mean contact force
-and torque, and ``converged`` (:func:`is_converged`: the energy on target and the forces
-balanced, by ``force_tol`` or to :data:`BALANCE_TOL` of the mean contact force). With
+number of bisections, whether its relaxation ended with the energy settled at a minimum
+(``energy_settled``), the residual forces and torques relative to the mean contact force
+and torque, and ``converged`` (:func:`is_converged`: the energy on target and settled, and
+the forces balanced, by ``force_tol`` or to :data:`BALANCE_TOL` of the mean contact force). With
 the closest-point law these residuals stay of the order of the contact forces for rods:
 the law has a kink at parallel side-by-side contacts, where FIRE stalls; use
 ``contact.spine_contact: end_bonds`` (:func:`pysim.contacts.end_bond`), whose energy is
@@ -60,12 +64,12 @@ def energy_density(sim: Simulation, d_min: float) -> float:
 #: target 1e-15 is only some 5e-8 wide in phi; with a 1e-7 bracket a third of the quick
 #: profile's states closed at 2-3.5e-15, just outside it
 PHI_TOL = 1e-8
-#: a bracket that closes on a packing with more energy than this is opened again below
-#: it: with the harmonic law ``U/L^d`` is about ``(phi - phi_J)^2``, so such a packing is
-#: still 1e-6 or more above its own jamming point, and the lower bound it closed
-#: on came from another packing (quick profile, alpha 0.12 seed 1: closed at U/L^2 =
-#: 8.8e-6 because expanding the first jammed packing by 4e-3 unjammed it, while the
-#: packing reached step by step from there stays jammed 1e-3 below the bound)
+#: a bracket that closes on a packing with more energy than this is opened again above
+#: its unjammed end: with the harmonic law ``U/L^d`` is about ``(phi - phi_J)^2``, so
+#: such a packing is still 1e-6 or more above its own jamming point, while the
+#: unjammed packing 1e-8 below it is in another basin (64 rods, alpha 0.5, seed 2: the
+#: bracket closed on a jammed packing at U/L^2 = 4e-6, while the unjammed one compressed
+#: from below held 1.4e-16 at 5e-9 below it, jammed by its contacts but under the target)
 REOPEN_ENERGY = 1e-12
 #: a packing is force-balanced when the minimisers reached ``force_tol`` or when every
 #: residual force and torque is below this fraction of the mean contact force and torque:
@@ -79,6 +83,15 @@ BALANCE_TOL = 1e-3
 #: the budget that 5 rounds of 200 000 gave (5 left two of the quick profile's rod states
 #: with residuals of 0.2-1.4 of the mean contact force, taken as jammed)
 RELAX_ROUNDS = 50
+#: a relaxation has reached a minimum when its energy fell by less than this fraction of
+#: itself in :data:`SETTLE_ROUNDS` rounds in a row (each ``max_relax`` / LBFGS_SHARE L-BFGS
+#: iterations and a FIRE run back to :data:`BALANCE_TOL`). Residuals below BALANCE_TOL alone
+#: are no minimum: of the 20 quick-profile stable states taken on that rule, 18 lost 0.3-70 %
+#: of their energy (two unjammed) when relaxed further, at 1-10 % per round, while the
+#: settled ones lose 1e-9 per round (L-BFGS can resolve no more)
+ENERGY_RTOL = 1e-6
+#: consecutive rounds that must satisfy :data:`ENERGY_RTOL`
+SETTLE_ROUNDS = 2
 #: FIRE checks the early stops of a relaxation (energy below a quarter of the target, or
 #: every residual below :data:`BALANCE_TOL`) every this many iterations: checked only at
 #: the end of each ``max_relax`` round, a state balanced to 1e-3 early on went on to the
@@ -93,6 +106,9 @@ LBFGS_SHARE = 10
 
 #: the final stable state as a checkpoint (:mod:`pysim.checkpoint`), beside the dumps
 STABLE_STATE = "stable_state.npz"
+#: the unjammed packing of the last trial, which the next trial compresses (a
+#: :mod:`pysim.checkpoint` kept for resuming while the bisection runs)
+BISECT_BASE = "bisect_base.npz"
 
 
 def backbone_fraction(sim: Simulation) -> float:
@@ -147,66 +163,94 @@ def balanced_to_tol(sim: Simulation) -> bool:
 
 def is_converged(result: dict, energy_target: float) -> bool:
     """Whether a ``jammed.json`` record is a converged mechanically stable state: ``U/L^d``
-    within a factor 2 of ``energy_target`` and the forces balanced (``force_balanced``,
-    called ``fire_balanced`` in records before L-BFGS joined the relaxation, or
-    every residual force and torque below :data:`BALANCE_TOL` of the mean contact force and
-    torque)."""
+    within a factor 2 of ``energy_target``, the energy settled at a minimum
+    (``energy_settled``, see :func:`relax`; records written before that rule lack it and
+    are not converged) and the forces balanced (``force_balanced``, or every residual
+    force and torque below :data:`BALANCE_TOL` of the mean contact force and torque)."""
     e = result["energy_density"]
     if not energy_target / 2 <= e <= 2 * energy_target:
         return False
-    if result.get("force_balanced", result.get("fire_balanced", False)):
+    if not result.get("energy_settled", False):
+        return False
+    if result.get("force_balanced", False):
         return True
     return _within_balance_tol(result)
 
 
-def relax(sim: Simulation, f_tol: float, max_relax: int, settled=balanced_to_tol) -> bool:
-    """Relax ``sim`` at fixed box until every force and torque is below ``f_tol``, in
-    rounds (at most :data:`RELAX_ROUNDS`) of ``max_relax`` FIRE iterations, each
-    followed, while the forces are unbalanced, by up to ``max_relax`` /
-    :data:`LBFGS_SHARE` L-BFGS iterations (:func:`pysim.minimize.lbfgs`); stops early
-    once ``settled(sim)`` holds (checked every :data:`CHECK_EVERY` FIRE iterations and
-    after each L-BFGS run, and before anything runs: a settled state is left as it is).
-    Returns whether the forces are balanced to ``f_tol``."""
-    sim.compute_forces()
-    if settled(sim):
-        return bool(max(np.linalg.norm(sim.f, axis=1).max(),
-                        np.linalg.norm(sim.torque, axis=1).max()) < f_tol)
-    balanced = False
-    for _ in range(RELAX_ROUNDS):
-        _, fmax, tmax = sim.minimize(f_tol=f_tol, max_iter=max_relax, until=settled,
+def relax(sim: Simulation, f_tol: float, max_relax: int, done=None) -> tuple[bool, bool]:
+    """Relax ``sim`` at fixed box to a minimum of its energy. FIRE first, until the
+    residuals are below :data:`BALANCE_TOL` (checked every :data:`CHECK_EVERY`
+    iterations) or ``max_relax`` iterations; then rounds (at most :data:`RELAX_ROUNDS`) of
+    ``max_relax`` / :data:`LBFGS_SHARE` L-BFGS iterations (:func:`pysim.minimize.lbfgs`)
+    followed by the same FIRE run, until the energy has stopped falling: for
+    :data:`SETTLE_ROUNDS` rounds in a row it fell by less than :data:`ENERGY_RTOL` of
+    itself and ended balanced to :data:`BALANCE_TOL`. Stops at once when every force and
+    torque is below ``f_tol`` or ``done(sim)`` holds (checked with the FIRE stops and
+    before anything runs). Returns ``(balanced to f_tol, stopped)``: ``stopped`` when the
+    energy stopped falling, the forces reached ``f_tol`` or ``done`` held."""
+    def stop(t: Simulation) -> bool:
+        return (done is not None and done(t)) or balanced_to_tol(t)
+
+    def fire() -> bool:
+        _, fmax, tmax = sim.minimize(f_tol=f_tol, max_iter=max_relax, until=stop,
                                      check_every=CHECK_EVERY)
-        balanced = fmax < f_tol and tmax < f_tol
-        if balanced or settled(sim):
-            break
+        return fmax < f_tol and tmax < f_tol
+
+    def finished() -> bool:
+        return balanced or (done is not None and done(sim))
+
+    sim.compute_forces()
+    balanced = bool(max(np.linalg.norm(sim.f, axis=1).max(initial=0.0),
+                        np.linalg.norm(sim.torque, axis=1).max(initial=0.0)) < f_tol)
+    if finished():
+        return balanced, True
+    balanced = fire()
+    calm = 0
+    for _ in range(RELAX_ROUNDS):
+        if finished():
+            return balanced, True
+        e0 = sim.thermo().pe
         with threadpool_limits(limits=1):  # BLAS threads only slow L-BFGS' vectors
             _, fmax, tmax = lbfgs(sim, f_tol, max(1, max_relax // LBFGS_SHARE))
         balanced = fmax < f_tol and tmax < f_tol
-        if balanced or settled(sim):
-            break
-    return balanced
+        if not finished():
+            balanced = fire()
+        fell = e0 - sim.thermo().pe
+        calm = calm + 1 if fell <= ENERGY_RTOL * e0 and balanced_to_tol(sim) else 0
+        if calm >= SETTLE_ROUNDS:
+            return balanced, True
+    return balanced, finished()
 
 
 def next_trial(drv: dict, e: float, target: float, max_bisections: int) -> float | None:
     """The bisection's next packing fraction, or ``None`` when it is done.
 
     ``drv`` holds the bracket (``lo``: the densest unjammed fraction, ``None`` when there
-    is none yet; ``hi``: that of the jammed packing held, whose energy density is ``e``)
-    and the ``bisections`` so far. Done when ``e`` is within a factor 2 of ``target``,
-    after ``max_bisections``, or when the bracket is narrower than :data:`PHI_TOL` with
-    ``e`` at most :data:`REOPEN_ENERGY` (an energy jump inside the bracket). A bracket
-    that closes above :data:`REOPEN_ENERGY` is opened again below the packing
-    (``lo = None``, counted in ``drv["reopened"]``): its lower bound came from expanding
-    an earlier, denser packing that unjammed, while the packing reached step by step is
-    still jammed below it. Without a lower bound the next trial expands to the middle
-    of ``[0.9 hi, hi]``; otherwise to the middle of ``[lo, hi]``.
+    is none yet; ``hi``: the least dense jammed one, ``None`` while searching upwards)
+    and the ``bisections`` so far; ``e`` is the energy density of the jammed packing held.
+    Done when ``e`` is within a factor 2 of ``target``, after ``max_bisections``, or when
+    the bracket is narrower than :data:`PHI_TOL` with ``e`` at most :data:`REOPEN_ENERGY`
+    (an energy jump inside the bracket). A bracket that closes above
+    :data:`REOPEN_ENERGY` is opened again above ``lo`` (``hi = None``, counted in
+    ``drv["reopened"]``): the jammed packing at ``hi`` lies in another basin than the
+    unjammed one at ``lo``, and the trials search upwards from ``lo`` in steps that start
+    at :data:`PHI_TOL` and double, until one jams. Without a lower bound the next trial is
+    the middle of ``[0.9 hi, hi]``; otherwise the middle of ``[lo, hi]``.
     """
     if target / 2 <= e <= 2 * target or drv["bisections"] >= max_bisections:
         return None
-    if drv["lo"] is not None and drv["hi"] - drv["lo"] < PHI_TOL:
+    closed = (drv["lo"] is not None and drv["hi"] is not None
+              and drv["hi"] - drv["lo"] < PHI_TOL)
+    if closed:
         if e <= REOPEN_ENERGY:
             return None
-        drv["lo"] = None
+        drv["hi"] = None
+        drv["step"] = PHI_TOL
         drv["reopened"] = drv.get("reopened", 0) + 1
+    if drv["hi"] is None:
+        goal = drv["lo"] + drv["step"]
+        drv["step"] *= 2
+        return goal
     lo = drv["lo"] if drv["lo"] is not None else 0.9 * drv["hi"]
     return 0.5 * (lo + drv["hi"])
 
@@ -238,18 +282,16 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
         law with tiny overlaps below jamming, which is no jammed packing."""
         return e > target / 2 and backbone_fraction(trial) >= 0.5
 
-    def relaxed_energy(trial: Simulation) -> tuple[float, bool]:
-        """:func:`relax` the trial packing, stopping early once its energy is below a
-        quarter of the target (unjammed, whatever comes next) or every residual force
-        and torque is below :data:`BALANCE_TOL` of the mean contact force and torque
-        (balanced by the rule of :func:`is_converged`: further rounds only cost time;
-        FIRE stalls near 1e-4 on some states). Returns ``U/L^d`` and whether the forces
-        are balanced to ``f_tol``."""
-        def settled(t: Simulation) -> bool:
-            return energy_density(t, d_min) < target / 4 or balanced_to_tol(t)
+    def relaxed_energy(trial: Simulation) -> tuple[float, bool, bool]:
+        """:func:`relax` the trial packing to a minimum, stopping early once its energy is
+        below a quarter of the target (unjammed, whatever comes next). Returns ``U/L^d``,
+        whether the forces are balanced to ``f_tol`` and whether the relaxation stopped
+        (a minimum, or unjammed) rather than ran out of rounds."""
+        def unjammed(t: Simulation) -> bool:
+            return energy_density(t, d_min) < target / 4
 
-        balanced = relax(trial, f_tol, p["max_relax"], settled)
-        return energy_density(trial, d_min), balanced
+        balanced, stopped = relax(trial, f_tol, p["max_relax"], unjammed)
+        return energy_density(trial, d_min), balanced, stopped
 
     def record(sim_):
         files.thermo(sim_.thermo().row())
@@ -270,38 +312,46 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
                 continue
             # relax a copy: the compression itself goes on from the unrelaxed packing
             trial = _copy(sim)
-            e, balanced = relaxed_energy(trial)
+            e, balanced, settled = relaxed_energy(trial)
             bar.update(1)
             bar.set_postfix(phi=f"{phi:.4f}", U=f"{e:.2e}", refresh=False)
             if jammed(trial, e):
-                drv.update(phase="bisect", hi=phi, balanced=balanced)
+                drv.update(phase="bisect", hi=phi, balanced=balanced, settled=settled)
                 sim = trial
                 s = sim.state
                 record(sim)
             else:
                 drv["lo"] = phi
             files.checkpoint(sim, drv)
+        # sim holds the jammed packing at phi_hi; each trial rescales the packing of the
+        # trial before (base): a jammed one is expanded, an unjammed one compressed
+        base_file = files.dir / BISECT_BASE
+        base = checkpoint.load(base_file)[0] if resume and base_file.exists() else sim
         while drv["phase"] == "bisect":
-            # sim holds the jammed packing at phi_hi; bisect from it towards phi_lo
             goal = next_trial(drv, energy_density(sim, d_min), target, p["max_bisections"])
             if goal is None:
                 drv["phase"] = "done"
                 break
-            trial = _copy(sim)
-            trial.rescale_box((drv["hi"] / goal) ** (1.0 / s.dimension))
-            e, balanced = relaxed_energy(trial)
+            trial = _copy(base)
+            trial.rescale_box((trial.state.packing_fraction() / goal) ** (1.0 / s.dimension))
+            e, balanced, settled = relaxed_energy(trial)
             drv["bisections"] += 1
             bar.update(1)
             bar.set_postfix(phi=f"{goal:.6f}", U=f"{e:.2e}", refresh=False)
+            base = trial
             if jammed(trial, e):
-                drv.update(hi=trial.state.packing_fraction(), balanced=balanced)
+                drv.update(hi=trial.state.packing_fraction(), balanced=balanced,
+                           settled=settled)
                 sim = trial
                 s = sim.state
                 record(sim)
+                base_file.unlink(missing_ok=True)
             else:
                 drv["lo"] = trial.state.packing_fraction()
                 s.step = trial.state.step  # keep the step count growing
+                checkpoint.save(base, base_file)
             files.checkpoint(sim, drv)
+        base_file.unlink(missing_ok=True)
     except BlowUpError as exc:
         raise BlowUpError(f"{exc}; the last good checkpoint is {files.ckpt}") from None
     finally:
@@ -310,7 +360,8 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     e = energy_density(sim, d_min)
     balanced = bool(drv.get("balanced", False))
     result = {"phi_j": s.packing_fraction(), "energy_density": e, "converged": False,
-              "force_balanced": balanced, "bisections": drv["bisections"],
+              "force_balanced": balanced,
+              "energy_settled": bool(drv.get("settled", False)), "bisections": drv["bisections"],
               "reopened": drv.get("reopened", 0), **residuals(sim)}
     result["converged"] = is_converged(result, target)
     io.atomic_write_text(files.dir / "jammed.json", json.dumps(result, indent=2) + "\n")

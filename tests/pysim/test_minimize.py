@@ -12,10 +12,10 @@ from pysim.simulation import ContactModel, Simulation
 from pysim.state import State
 
 
-def overlapping_rods(dim, n, alpha, phi, seed, spine_contact):
+def overlapping_rods(dim, n, alpha, phi, seed, spine_contact, k_n=1.0):
     """Rods placed at random without overlap (random sequential addition at half of
     ``phi``), then the periodic box shrunk affinely to ``phi``, well above jamming: they
-    overlap. Bidisperse radii 0.5 and 0.7, harmonic law with k_n = 1."""
+    overlap. Bidisperse radii 0.5 and 0.7, harmonic law (``k_n``)."""
     rng = np.random.default_rng(seed)
     r = rng.choice([0.5, 0.7], n)
     x, u, r, length, box = random_spherocylinders(r, 2 * alpha * r, phi / 2, seed, dim)
@@ -23,7 +23,7 @@ def overlapping_rods(dim, n, alpha, phi, seed, spine_contact):
         box[2] = 1.0
     st = State.create(x, r, length, box, axis=u, dimension=dim,
                       periodic=(True, True, dim == 3))
-    model = ContactModel("harmonic", 1.0, spine_contact=spine_contact)
+    model = ContactModel("harmonic", k_n, spine_contact=spine_contact)
     sim = Simulation(st, model, dt=0.01, check_dt=False, max_overlap=1.0)
     sim.rescale_box(0.5 ** (1 / dim))
     return sim
@@ -101,3 +101,32 @@ def test_fire_checks_until_every_check_every_iterations():
     assert not stopped.state.v.any() and not stopped.state.omega.any()
     with pytest.raises(ValueError, match="check_every"):
         stopped.minimize(f_tol=1e-14, until=lambda s: True, check_every=0)
+
+
+def test_lbfgs_does_not_depend_on_the_scale_of_the_energy():
+    """The first step moves the particles by the mean overlap whatever ``k_n``: with the
+    forces of a packing near jamming (1e-14 of those of k_n = 1), L-BFGS balances the same
+    packing to the same relative tolerance, and ends where it does with k_n = 1 (its
+    later steps do not depend on the scale). Unscaled, its first step was 1e14 times too
+    long and the line search gave up before the first iteration."""
+    ends = []
+    for k_n in (1.0, 1e-14):
+        sim = overlapping_rods(2, 40, 1.0, 0.95, 3, "end_bonds", k_n)
+        it, fmax, tmax = lbfgs(sim, f_tol=1e-7 * k_n, max_iter=20_000)
+        assert it > 10 and fmax < 1e-7 * k_n and tmax < 1e-7 * k_n, (k_n, it, fmax, tmax)
+        ends.append(sim.state.x.copy())
+    np.testing.assert_allclose(ends[1], ends[0], atol=1e-6)
+
+
+def test_lbfgs_turns_nearly_round_rods():
+    """Rotations are scaled by the half-length, so rods of alpha 0.02, whose rotational
+    stiffness is some (L/2R)^2 = 4e-4 of the translational one, are balanced in torque
+    as well as in force: L-BFGS runs until its line search can resolve no more (forces
+    some 1e-8 of the start, energy of order k_n) with the torques below 2e-7 of the start.
+    Scaled by the radius it stopped at 5.6e-7, after twice the iterations."""
+    sim = overlapping_rods(2, 40, 0.02, 0.95, 3, "end_bonds")
+    sim.compute_forces()
+    f0 = np.linalg.norm(sim.f, axis=1).max()
+    t0 = np.linalg.norm(sim.torque, axis=1).max()
+    it, fmax, tmax = lbfgs(sim, f_tol=1e-30, max_iter=2000)
+    assert fmax < 1e-7 * f0 and tmax < 2e-7 * t0, (it, fmax / f0, tmax / t0)

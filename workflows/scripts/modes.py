@@ -7,8 +7,8 @@ against frequency.
 Each final state is read at full precision (``stable_state.npz``; older runs only have
 the 10-digit final frame, which unbalances forces of 1e-8 by some 1 % and can open the
 shallowest contacts), relaxed again at its box with pysim
-(:func:`pysim.protocols.jammed.relax`, to :data:`~pysim.protocols.jammed.BALANCE_TOL`;
-nothing to do for an exact state) and rattlers are removed by science.md's 2-D rule
+(:func:`pysim.protocols.jammed.relax`, to a minimum of the energy; little to do for a
+settled state) and rattlers are removed by science.md's 2-D rule
 before the Hessian is built. Units: ``k_n = 1``, density 1 per area, smallest
 diameter 1.
 """
