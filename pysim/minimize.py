@@ -13,10 +13,15 @@ have units of length and a unit step of either moves the spine's ends by about t
 distance. (Scaled by ``max(L_i/2, R_i)``, the stiffness of a rotation, ``~ k (L/2)^2``, fell
 below that of a translation by ``(L/2R)^2``: 1e-4 at alpha 0.01, where a jammed-looking
 2-D packing of 256 rods lost 1 % of its energy per 2000 iterations for 80 000 iterations;
-scaled by ``L/2`` it unjammed in 10 000.) The energy is scaled by a constant so that
-the first step, whose length L-BFGS sets to 1 over the gradient's norm, moves the
-particles by the mean overlap: unscaled, a packing near jamming (forces of 1e-8 k_n D)
-took a first step of 1e8 D, and the line search gave up before the first iteration. The gradient is exact: ``dU/dx_i = -F_i`` and, from
+scaled by ``L/2`` it unjammed in 10 000.) All coordinates
+are then divided by the length ``h`` of the first move, which L-BFGS makes one unit of
+its coordinates long, and the energy by a constant; the choices of
+:data:`FIRST_MOVES` are tried in turn while the line search gives up at once: near
+jamming it gives up with one choice on some packings and with another on others
+(measured, not understood), and a line search that gave up looked like a minimum to
+the relaxation (:func:`pysim.protocols.jammed.relax`).
+
+The gradient is exact: ``dU/dx_i = -F_i`` and, from
 ``tau = -u x dU/du``, ``dU/dw_i = (u_i x tau_i)/|w_i|``. In 2-D only the in-plane
 components move. Pair lists are kept as in a run (:func:`pysim.integrators.maybe_rebuild`).
 """
@@ -60,6 +65,7 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
     last = {"z": None, "fmax": np.inf, "tmax": np.inf}
 
     def energy(z):
+        z = h * z  # lengths
         s.x[:, :dim] = z[:nx].reshape(n, dim)
         itg.wrap(s.x, s.box, s.periodic)
         w = z[nx:].reshape(len(rods), dim) / scale
@@ -71,14 +77,14 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
                                          sim.sys, *sim._pairs(), sim.x_ref, sim.u_ref,
                                          sim.box_ref)[:7])
         sim.compute_forces()
-        last.update(z=z.copy(), fmax=float(np.sqrt(np.max(np.sum(sim.f**2, axis=1)))),
+        last.update(z=z / h, fmax=float(np.sqrt(np.max(np.sum(sim.f**2, axis=1)))),
                     tmax=float(np.sqrt(np.max(np.sum(sim.torque**2, axis=1)))))
         grad = np.empty_like(z)
         grad[:nx] = -sim.f[:, :dim].ravel()
         if len(rods):
             gw = np.cross(s.u[rods], sim.torque[rods]) / norm[:, None]
             grad[nx:] = (gw[:, :dim] / scale).ravel()
-        return c * sim._pe, c * grad
+        return c * sim._pe, (c * h) * grad
 
     def at(z):
         if last["z"] is None or not np.array_equal(z, last["z"]):
@@ -89,18 +95,29 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
         if at(z):
             raise StopIteration
 
-    z0 = np.concatenate([s.x[:, :dim].ravel(), (s.u[rods, :dim] * scale).ravel()])
+    y = np.concatenate([s.x[:, :dim].ravel(), (s.u[rods, :dim] * scale).ravel()])
+    h = 1.0
     c = 1.0
     iterations = 0
     try:
-        if not at(z0):
-            c = _first_step_scale(sim, energy(z0)[1])
-            last["z"] = None
-            res = minimize(energy, z0, jac=True, method="L-BFGS-B", callback=stop,
-                           options=dict(maxiter=int(max_iter), maxfun=10 * int(max_iter),
-                                        maxcor=int(memory), gtol=0.0, ftol=0.0))
-            iterations = int(res.nit)
-            at(res.x)
+        if not at(y):
+            overlap = _mean_overlap(sim)
+            norm = float(np.linalg.norm(energy(y)[1]))
+            for move in FIRST_MOVES:
+                # one unit of length, the energy scaled to unit gradient per mean overlap;
+                # or a move of some mean overlap, the energy as it is
+                h = 1.0 if move is None else move * overlap
+                c = 1.0 / (norm * overlap) if move is None and norm > 0 else 1.0
+                last["z"] = None
+                res = minimize(energy, y / h, jac=True, method="L-BFGS-B", callback=stop,
+                               options=dict(maxiter=int(max_iter) - iterations,
+                                            maxfun=10 * int(max_iter), maxcor=int(memory),
+                                            gtol=0.0, ftol=0.0))
+                iterations += int(res.nit)
+                done = at(res.x)
+                y = h * res.x
+                if done or res.nit >= GAVE_UP or iterations >= max_iter:
+                    break
     finally:
         if len(rods):  # forces need the spines only; the quaternions follow them once
             s.q[rods] = quaternions_from_axes(s.u[rods])
@@ -111,13 +128,17 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
     return iterations, last["fmax"], last["tmax"]
 
 
-def _first_step_scale(sim, grad) -> float:
-    """The factor on the energy that makes L-BFGS' first step (length 1/|gradient|) the
-    mean overlap of the contacts (1 when nothing overlaps)."""
-    _, rec = sim.contact_table()
-    overlap = rec[:, 6][rec[:, 6] > 0.0]
-    norm = float(np.linalg.norm(grad))
-    if len(overlap) == 0 or norm == 0.0:
-        return 1.0
-    return 1.0 / (norm * float(overlap.mean()))
+#: L-BFGS' first moves tried in turn while its line search gives up within
+#: :data:`GAVE_UP` iterations: one unit of length with the energy scaled to a gradient of
+#: one over the mean overlap (``None``), then 1 and 1e-3 of the mean overlap with the
+#: energy as it is (near jamming some packings need the first, others a later one)
+FIRST_MOVES = (None, 1.0, 1e-3)
+#: L-BFGS runs of fewer iterations than this (without reaching ``f_tol``) gave up
+GAVE_UP = 10
 
+
+def _mean_overlap(sim) -> float:
+    """Mean overlap of the touching contacts (1 when nothing overlaps)."""
+    _, rec = sim.contact_table()
+    touching = rec[:, 6] > 0.0
+    return float(rec[touching, 6].mean()) if touching.any() else 1.0

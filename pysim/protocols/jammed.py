@@ -6,14 +6,16 @@
    ``thermo_every`` steps; the compression stops at the first packing whose relaxed
    elastic energy per area ``U/L^d`` exceeds ``energy_target`` (jammed).
 2. **Bisect the box size**: between the last unjammed packing fraction and the first
-   jammed one, rescale the box affinely to the middle, relax, and move the bracket. Each
-   trial starts from the packing of the trial before, as in O'Hern et al. (2003): a
-   jammed one is expanded, an unjammed one compressed. (Expanding only the jammed
-   packing stalled where every expansion of it unjams: the bracket closed on it at
-   U/L^2 = 4e-6 in a 64-rod test.) The bisection ends when ``U/L^d`` lies within a
+   jammed one, expand the box of the jammed packing affinely to the middle, relax, and
+   move the bracket. Where every expansion of the jammed packing unjams (an energy jump;
+   a 64-rod test closed its bracket at U/L^2 = 4e-6 so), the bracket is opened above the
+   unjammed packing, which is compressed until it jams (:func:`next_trial`), and the
+   bisection goes on from there. (Starting every trial from the trial before, as O'Hern
+   et al. 2003 do in small steps, mixes packings: a large compression of an unjammed one
+   lands in another basin.) The bisection ends when ``U/L^d`` lies within a
    factor 2 of ``energy_target``, or the bracket is narrower than :data:`PHI_TOL` (opened
-   again above the unjammed packing when the jammed one still holds more than
-   :data:`REOPEN_ENERGY`: they lie in different basins), or ``max_bisections`` is reached. Each
+   again when the jammed packing still holds more than :data:`REOPEN_ENERGY`: the ends lie
+   in different basins; see :func:`next_trial`), or ``max_bisections`` is reached. Each
    relaxation (:func:`relax`) runs FIRE and L-BFGS (:func:`pysim.minimize.lbfgs`) in
    rounds until the energy has stopped falling: a packing with small residual forces
    may still be sliding towards an unjammed state, and taken as jammed it stalls the
@@ -64,12 +66,15 @@ def energy_density(sim: Simulation, d_min: float) -> float:
 #: target 1e-15 is only some 5e-8 wide in phi; with a 1e-7 bracket a third of the quick
 #: profile's states closed at 2-3.5e-15, just outside it
 PHI_TOL = 1e-8
-#: a bracket that closes on a packing with more energy than this is opened again above
-#: its unjammed end: with the harmonic law ``U/L^d`` is about ``(phi - phi_J)^2``, so
-#: such a packing is still 1e-6 or more above its own jamming point, while the
-#: unjammed packing 1e-8 below it is in another basin (64 rods, alpha 0.5, seed 2: the
-#: bracket closed on a jammed packing at U/L^2 = 4e-6, while the unjammed one compressed
-#: from below held 1.4e-16 at 5e-9 below it, jammed by its contacts but under the target)
+#: a bracket that closes on a packing with more energy than this is opened again
+#: (:func:`next_trial`): with the harmonic law ``U/L^d`` is about ``(phi - phi_J)^2``, so
+#: such a packing is still 1e-6 or more above its own jamming point, and the two ends
+#: of the bracket lie in different basins: below, when the lower end came from the
+#: compression (quick profile, alpha 0.12 seed 1: closed at U/L^2 = 8.8e-6 on a lower
+#: bound from another packing, while the packing reached step by step stays jammed 1e-3
+#: below it); above, when it came from expanding the jammed packing, which unjams at the
+#: smallest expansion (64 rods, alpha 0.5, seed 2: closed at 4e-6, while the unjammed
+#: packing compressed from below jams with 1.4e-16 at 5e-9 under it)
 REOPEN_ENERGY = 1e-12
 #: a packing is force-balanced when the minimisers reached ``force_tol`` or when every
 #: residual force and torque is below this fraction of the mean contact force and torque:
@@ -90,8 +95,11 @@ RELAX_ROUNDS = 50
 #: of their energy (two unjammed) when relaxed further, at 1-10 % per round, while the
 #: settled ones lose 1e-9 per round (L-BFGS can resolve no more)
 ENERGY_RTOL = 1e-6
-#: consecutive rounds that must satisfy :data:`ENERGY_RTOL`
-SETTLE_ROUNDS = 2
+#: consecutive rounds that must satisfy :data:`ENERGY_RTOL`: near a saddle the energy
+#: can stay put for a round or two (L-BFGS' line search gives up at once) and then fall
+#: (a 256-rod packing at U/L^2 = 2e-7 was taken as settled after two such rounds and
+#: unjammed on the next expansion)
+SETTLE_ROUNDS = 3
 #: FIRE checks the early stops of a relaxation (energy below a quarter of the target, or
 #: every residual below :data:`BALANCE_TOL`) every this many iterations: checked only at
 #: the end of each ``max_relax`` round, a state balanced to 1e-3 early on went on to the
@@ -106,8 +114,8 @@ LBFGS_SHARE = 10
 
 #: the final stable state as a checkpoint (:mod:`pysim.checkpoint`), beside the dumps
 STABLE_STATE = "stable_state.npz"
-#: the unjammed packing of the last trial, which the next trial compresses (a
-#: :mod:`pysim.checkpoint` kept for resuming while the bisection runs)
+#: the packing of the last unjammed trial, which the trials compress while the bracket is
+#: open above (a :mod:`pysim.checkpoint` kept for resuming while the bisection runs)
 BISECT_BASE = "bisect_base.npz"
 
 
@@ -231,11 +239,18 @@ def next_trial(drv: dict, e: float, target: float, max_bisections: int) -> float
     Done when ``e`` is within a factor 2 of ``target``, after ``max_bisections``, or when
     the bracket is narrower than :data:`PHI_TOL` with ``e`` at most :data:`REOPEN_ENERGY`
     (an energy jump inside the bracket). A bracket that closes above
-    :data:`REOPEN_ENERGY` is opened again above ``lo`` (``hi = None``, counted in
-    ``drv["reopened"]``): the jammed packing at ``hi`` lies in another basin than the
-    unjammed one at ``lo``, and the trials search upwards from ``lo`` in steps that start
-    at :data:`PHI_TOL` and double, until one jams. Without a lower bound the next trial is
-    the middle of ``[0.9 hi, hi]``; otherwise the middle of ``[lo, hi]``.
+    :data:`REOPEN_ENERGY` is opened again (counted in ``drv["reopened"]``), on the side
+    where the search can go on:
+
+    * ``lo`` from a trial of the bisection (``drv["lo_trial"]``): the jammed packing
+      unjams on the smallest expansion, the edge of its basin. The bracket is opened
+      above (``hi = None``), and the trials compress the unjammed packing in steps that
+      start at :data:`PHI_TOL` and double, until one jams.
+    * ``lo`` from the compression (another packing): the jammed packing may stay jammed
+      well below it. The bracket is opened below (``lo = None``).
+
+    Without a lower bound the next trial is the middle of ``[0.9 hi, hi]``; otherwise the
+    middle of ``[lo, hi]``.
     """
     if target / 2 <= e <= 2 * target or drv["bisections"] >= max_bisections:
         return None
@@ -244,9 +259,12 @@ def next_trial(drv: dict, e: float, target: float, max_bisections: int) -> float
     if closed:
         if e <= REOPEN_ENERGY:
             return None
-        drv["hi"] = None
-        drv["step"] = PHI_TOL
         drv["reopened"] = drv.get("reopened", 0) + 1
+        if drv.get("lo_trial", False):
+            drv["hi"] = None
+            drv["step"] = PHI_TOL
+        else:
+            drv["lo"] = None
     if drv["hi"] is None:
         goal = drv["lo"] + drv["step"]
         drv["step"] *= 2
@@ -323,35 +341,34 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
             else:
                 drv["lo"] = phi
             files.checkpoint(sim, drv)
-        # sim holds the jammed packing at phi_hi; each trial rescales the packing of the
-        # trial before (base): a jammed one is expanded, an unjammed one compressed
-        base_file = files.dir / BISECT_BASE
-        base = checkpoint.load(base_file)[0] if resume and base_file.exists() else sim
+        # sim holds the jammed packing at phi_hi, low that of the last unjammed trial;
+        # each trial expands sim, or compresses low while the bracket is open above
+        low_file = files.dir / BISECT_BASE
+        low = checkpoint.load(low_file)[0] if resume and low_file.exists() else None
         while drv["phase"] == "bisect":
             goal = next_trial(drv, energy_density(sim, d_min), target, p["max_bisections"])
             if goal is None:
                 drv["phase"] = "done"
                 break
-            trial = _copy(base)
+            trial = _copy(low if drv["hi"] is None and low is not None else sim)
             trial.rescale_box((trial.state.packing_fraction() / goal) ** (1.0 / s.dimension))
             e, balanced, settled = relaxed_energy(trial)
             drv["bisections"] += 1
             bar.update(1)
             bar.set_postfix(phi=f"{goal:.6f}", U=f"{e:.2e}", refresh=False)
-            base = trial
             if jammed(trial, e):
                 drv.update(hi=trial.state.packing_fraction(), balanced=balanced,
                            settled=settled)
                 sim = trial
                 s = sim.state
                 record(sim)
-                base_file.unlink(missing_ok=True)
             else:
-                drv["lo"] = trial.state.packing_fraction()
+                drv.update(lo=trial.state.packing_fraction(), lo_trial=True)
                 s.step = trial.state.step  # keep the step count growing
-                checkpoint.save(base, base_file)
+                low = trial
+                checkpoint.save(low, low_file)
             files.checkpoint(sim, drv)
-        base_file.unlink(missing_ok=True)
+        low_file.unlink(missing_ok=True)
     except BlowUpError as exc:
         raise BlowUpError(f"{exc}; the last good checkpoint is {files.ckpt}") from None
     finally:

@@ -104,11 +104,11 @@ def test_fire_checks_until_every_check_every_iterations():
 
 
 def test_lbfgs_does_not_depend_on_the_scale_of_the_energy():
-    """The first step moves the particles by the mean overlap whatever ``k_n``: with the
-    forces of a packing near jamming (1e-14 of those of k_n = 1), L-BFGS balances the same
-    packing to the same relative tolerance, and ends where it does with k_n = 1 (its
-    later steps do not depend on the scale). Unscaled, its first step was 1e14 times too
-    long and the line search gave up before the first iteration."""
+    """L-BFGS scales the energy to a gradient of one over the mean overlap, so it does
+    not depend on ``k_n``: with the forces of a packing near jamming (1e-14 of those of
+    k_n = 1), it balances the same packing to the same relative tolerance and ends where
+    it does with k_n = 1. Unscaled, it took the same first move of one length unit
+    against gradients 1e14 times smaller, and ended elsewhere."""
     ends = []
     for k_n in (1.0, 1e-14):
         sim = overlapping_rods(2, 40, 1.0, 0.95, 3, "end_bonds", k_n)

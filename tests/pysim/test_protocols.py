@@ -186,26 +186,32 @@ def test_converged_needs_the_energy_settled_and_balanced_forces():
 
 def test_bisection_reopens_a_bracket_that_closes_far_above_the_target():
     """``next_trial``: a bracket narrower than PHI_TOL on a packing far above the target
-    energy (64 rods, alpha 0.5, seed 2: U/L^2 = 4e-6, with an unjammed packing 5e-9
-    below it in another basin) is opened again above its lower end, which the trials
-    then compress in steps of PHI_TOL, 2 PHI_TOL, 4 PHI_TOL... until one jams, and the
-    bisection goes on below that; a closed bracket with an energy jump below
-    REOPEN_ENERGY ends the bisection, as does an energy on target or
+    energy is opened again on the side where the search can go on. Lower end from a
+    trial (64 rods, alpha 0.5, seed 2: U/L^2 = 4e-6, the jammed packing unjams on the
+    smallest expansion): opened above, and the trials compress the unjammed packing in
+    steps of PHI_TOL, 2 PHI_TOL, 4 PHI_TOL... until one jams, then bisect below it. Lower
+    end from the compression, another packing (the quick profile's alpha 0.12 seed 1:
+    U/L^2 = 8.8e-6): opened below and bisected from ``0.9 hi``. A closed bracket with an
+    energy jump below REOPEN_ENERGY ends the bisection, as does an energy on target or
     ``max_bisections``."""
     from pysim.protocols.jammed import PHI_TOL, REOPEN_ENERGY, next_trial
 
     hi = 0.8682
     lo = hi - PHI_TOL / 2
     closed = {"lo": lo, "hi": hi, "bisections": 20}
-    drv = dict(closed)
+    drv = {**closed, "lo_trial": True}
     assert next_trial(drv, 4e-6, 1e-15, 50) == pytest.approx(lo + PHI_TOL, abs=1e-15)
     assert drv["hi"] is None and drv["reopened"] == 1
     drv["lo"] = lo + PHI_TOL  # unjammed: the next step is twice as long
     assert next_trial(drv, 4e-6, 1e-15, 50) == pytest.approx(lo + 3 * PHI_TOL, abs=1e-15)
     drv["hi"] = lo + 3 * PHI_TOL  # jammed, above the target: bisect again
     assert next_trial(drv, 1e-14, 1e-15, 50) == pytest.approx(lo + 2 * PHI_TOL, abs=1e-15)
-    # an energy jump inside the bracket, below REOPEN_ENERGY: nothing better to find
+    # the lower end from the compression: opened below
     drv = dict(closed)
+    assert next_trial(drv, 8.8e-6, 1e-15, 50) == pytest.approx(0.95 * hi)
+    assert drv["lo"] is None and drv["hi"] == hi and drv["reopened"] == 1
+    # an energy jump inside the bracket, below REOPEN_ENERGY: nothing better to find
+    drv = {**closed, "lo_trial": True}
     assert next_trial(drv, 0.5 * REOPEN_ENERGY, 1e-15, 50) is None
     assert drv["hi"] == closed["hi"] and "reopened" not in drv
     # open bracket: its middle; on target or out of bisections: done
