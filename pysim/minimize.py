@@ -64,8 +64,8 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
     s.omega[:] = 0.0
     last = {"z": None, "fmax": np.inf, "tmax": np.inf}
 
-    def energy(z):
-        z = h * z  # lengths
+    def energy(zs):
+        z = h * zs  # lengths
         s.x[:, :dim] = z[:nx].reshape(n, dim)
         itg.wrap(s.x, s.box, s.periodic)
         w = z[nx:].reshape(len(rods), dim) / scale
@@ -77,13 +77,14 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
                                          sim.sys, *sim._pairs(), sim.x_ref, sim.u_ref,
                                          sim.box_ref)[:7])
         sim.compute_forces()
-        last.update(z=z / h, fmax=float(np.sqrt(np.max(np.sum(sim.f**2, axis=1)))),
+        last.update(z=zs.copy(), fmax=float(np.sqrt(np.max(np.sum(sim.f**2, axis=1)))),
                     tmax=float(np.sqrt(np.max(np.sum(sim.torque**2, axis=1)))))
         grad = np.empty_like(z)
         grad[:nx] = -sim.f[:, :dim].ravel()
         if len(rods):
             gw = np.cross(s.u[rods], sim.torque[rods]) / norm[:, None]
             grad[nx:] = (gw[:, :dim] / scale).ravel()
+        last["grad_norm"] = float(np.linalg.norm(grad))
         return c * sim._pe, (c * h) * grad
 
     def at(z):
@@ -102,7 +103,7 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
     try:
         if not at(y):
             overlap = _mean_overlap(sim)
-            norm = float(np.linalg.norm(energy(y)[1]))
+            norm = last["grad_norm"]  # of the energy in lengths, from at(y)
             for move in FIRST_MOVES:
                 # one unit of length, the energy scaled to unit gradient per mean overlap;
                 # or a move of some mean overlap, the energy as it is

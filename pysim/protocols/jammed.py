@@ -91,9 +91,9 @@ RELAX_ROUNDS = 50
 #: a relaxation has reached a minimum when its energy fell by less than this fraction of
 #: itself in :data:`SETTLE_ROUNDS` rounds in a row (each ``max_relax`` / LBFGS_SHARE L-BFGS
 #: iterations and a FIRE run back to :data:`BALANCE_TOL`). Residuals below BALANCE_TOL alone
-#: are no minimum: of the 20 quick-profile stable states taken on that rule, 18 lost 0.3-70 %
-#: of their energy (two unjammed) when relaxed further, at 1-10 % per round, while the
-#: settled ones lose 1e-9 per round (L-BFGS can resolve no more)
+#: are no minimum: of the 20 quick-profile stable states taken on that rule, 18 lost 0.4-100 %
+#: of their energy (three unjammed) when relaxed further, at 1-10 % per 2000 L-BFGS
+#: iterations, while settled states lose some 1e-9 per round (L-BFGS resolves no more)
 ENERGY_RTOL = 1e-6
 #: consecutive rounds that must satisfy :data:`ENERGY_RTOL`: near a saddle the energy
 #: can stay put for a round or two (L-BFGS' line search gives up at once) and then fall
