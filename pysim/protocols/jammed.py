@@ -82,11 +82,11 @@ REOPEN_ENERGY = 1e-12
 #: contact force, which FIRE does not always reach for rods, while a state left with 7 %
 #: residuals (the false jammed state that stalled the bisection) is far above this
 BALANCE_TOL = 1e-3
-#: FIRE runs of ``max_relax`` iterations at most per relaxation: a packing whose forces
-#: are not yet balanced is relaxed on, since with energy left it may still be sliding
-#: out of a jammed-looking state. With rounds of 20 000 FIRE iterations, 50 rounds give
-#: the budget that 5 rounds of 200 000 gave (5 left two of the quick profile's rod states
-#: with residuals of 0.2-1.4 of the mean contact force, taken as jammed)
+#: rounds (L-BFGS, then FIRE of up to ``max_relax`` iterations) at most per relaxation
+#: while the energy still falls (:func:`relax`): a packing with energy left may still be
+#: sliding out of a jammed-looking state. With FIRE runs of 20 000 iterations, 50 rounds
+#: give the budget that 5 rounds of 200 000 gave (5 left two of the quick profile's rod
+#: states with residuals of 0.2-1.4 of the mean contact force, taken as jammed)
 RELAX_ROUNDS = 50
 #: a relaxation has reached a minimum when its energy fell by less than this fraction of
 #: itself in :data:`SETTLE_ROUNDS` rounds in a row (each ``max_relax`` / LBFGS_SHARE L-BFGS
