@@ -4,7 +4,8 @@
 
 * observables: ``phi_j`` (with its fit error), ``jamming_slope`` (``dp/dphi`` of the
   fit), ``z_j`` (rattler-free contact number
-  at the first frame at or above ``phi_J``), ``z_j_with_rattlers``,
+  at the first frame at or above ``phi_J`` that keeps a backbone: a frame whose rattler
+  removal empties it has not jammed yet), ``z_j_with_rattlers``,
   ``rattler_fraction_j``, ``phi_at_z_j``, ``phi_final``, ``pressure_final``;
 * curves: per output frame, ``phi``, contact ``pressure`` (from the contact table),
   ``z``, ``z_rattler_free``, ``n_rattlers`` and the thermo ``p(phi)``.
@@ -82,7 +83,10 @@ def analyse_compression(run_dir, window, p_scale: float, c_min: int | None = Non
     except JammingFitError as exc:
         phi_j, phi_j_err, slope, fit = np.nan, np.nan, np.nan, {"error": str(exc)}
     rows += [("phi_j", phi_j, phi_j_err), ("jamming_slope", slope, np.nan)]
-    above = curves[curves.phi >= phi_j] if np.isfinite(phi_j) else curves.iloc[0:0]
+    # the fit extrapolates a dynamic pressure: the first frame above phi_J may still have
+    # no rigid backbone (every particle a rattler), and its z_rattler_free = 0 is no z_J
+    above = (curves[(curves.phi >= phi_j) & (curves.n_rattlers < curves.n)]
+             if np.isfinite(phi_j) else curves.iloc[0:0])
     if len(above):
         first = above.iloc[0]
         rows += [("z_j", first.z_rattler_free, np.nan),

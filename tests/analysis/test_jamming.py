@@ -1,5 +1,6 @@
 """Jamming point from the first linear pressure rise."""
 import numpy as np
+import pandas as pd
 import pytest
 
 from analysis.jamming import JammingFitError, JammingPoint, first_rise
@@ -75,3 +76,28 @@ def test_two_stage_compression_fits_the_slow_stage_only(tmp_path, rng):
     assert phi_j == pytest.approx(0.842, abs=2e-3)
     rows, _curves, _thermo = analyse_compression(tmp_path, window, 1.0)
     assert dict((name, v) for name, v, _e in rows)["phi_j"] < 0.8  # the transient, fitted
+
+
+def test_z_j_skips_frames_without_a_backbone(tmp_path, monkeypatch):
+    """The first frame above the extrapolated phi_J can still be unjammed: rattler
+    removal empties it (z_rattler_free 0). z_J is that of the first frame that keeps a
+    backbone, not 0."""
+    from analysis import summary
+    from pysim import io
+
+    phi = np.linspace(0.60, 0.66, 61)
+    p = np.where(phi > 0.63, 0.5 * (phi - 0.63), 0.0)
+    with open(tmp_path / "thermo.dat", "w") as fh:
+        fh.write(io.thermo_header())
+        for k, (f, q) in enumerate(zip(phi, p)):
+            io.write_thermo_row(fh, (k * 100, k, f, q, 0.0, 0.0, 0))
+    curves = pd.DataFrame({"step": [0, 1, 2, 3], "phi": [0.62, 0.6301, 0.632, 0.64],
+                           "z": [3.0, 4.5, 5.6, 6.2], "z_rattler_free": [0.0, 0.0, 5.9, 6.4],
+                           "z_bonds": [3.0, 4.5, 5.6, 6.2], "n_rattlers": [500, 500, 80, 20],
+                           "n": [500] * 4, "s_nematic": [np.nan] * 4})
+    monkeypatch.setattr(summary, "frame_curves", lambda run, c_min: curves.copy())
+    rows, _curves, _thermo = summary.analyse_compression(tmp_path, (1e-3, 1e-2), 1.0)
+    got = {name: v for name, v, _e in rows}
+    assert got["phi_j"] == pytest.approx(0.63, abs=1e-3)
+    assert got["z_j"] == 5.9 and got["phi_at_z_j"] == 0.632
+    assert got["rattler_fraction_j"] == pytest.approx(80 / 500)

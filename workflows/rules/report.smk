@@ -56,18 +56,32 @@ rule plot_study:
         " --window {params.window} {params.dirs} 2> {log}"
 
 
+#: physical parameters a study's trends are drawn against, in order of preference: the
+#: time step or output intervals may vary beside them (small particles need a shorter
+#: step, slow runs write less often) and are never the axis then
+TREND_PARAMETERS = ("alpha", "sigma", "kappa")
+
+
 def _trend_parameter(study):
-    # output intervals may differ between variants (slow runs write less often): never
-    # a physical parameter to plot against
     params = sorted(set(varying_parameters(CFG, study)) - {"thermo_every", "dump_every"})
-    return "alpha" if "alpha" in params else (params[0] if params else None)
+    preferred = [p for p in TREND_PARAMETERS if p in params]
+    return preferred[0] if preferred else (params[0] if params else None)
 
 
 def _trend_series(study):
-    # deposits vary the Bond number beside the aspect ratio: one line per Bond number
-    params = set(varying_parameters(CFG, study))
-    if _trend_parameter(study) == "alpha" and "bond_number" in params:
+    # a second physical parameter is drawn as one line per value: deposits vary the Bond
+    # number beside the aspect ratio; sphere packings the compression rate beside sigma,
+    # on a full grid (a rate set for a few aspect ratios only, as for long rods, is a
+    # numerical setting, not a series)
+    params = varying_parameters(CFG, study)
+    axis = _trend_parameter(study)
+    if axis == "alpha" and "bond_number" in params:
         return "--series bond_number"
+    for other in TREND_PARAMETERS:
+        if axis in TREND_PARAMETERS and other != axis and other in params:
+            pairs = {(params[axis][v], params[other][v]) for v in params[axis]}
+            if len(pairs) == len(set(params[axis].values())) * len(set(params[other].values())):
+                return f"--series {other}"
     return ""
 
 
