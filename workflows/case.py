@@ -536,10 +536,15 @@ def varying_parameters(config: dict, study: str) -> dict[str, dict[str, object]]
     :data:`PARAMETER_NAMES` where one exists, else the last key. Keys under
     :data:`ENGINE_ONLY` are left out.
     """
-    flat = {}
-    for (s, v, _), case in config["_cases"].items():
-        if s == study:
-            flat[v] = _flatten({k: val for k, val in case.items() if k != "seed"})
+    return varying_columns({v: case for (s, v, _), case in config["_cases"].items()
+                            if s == study})
+
+
+def varying_columns(cases: dict[str, dict]) -> dict[str, dict[str, object]]:
+    """:func:`varying_parameters` of the cases ``{variant: case}`` (e.g. read back from the
+    ``case.yaml`` files of finished runs); ``seed`` never varies a column."""
+    flat = {v: _flatten({k: val for k, val in case.items() if k != "seed"})
+            for v, case in cases.items()}
     keys = set().union(*[set(f) for f in flat.values()]) if flat else set()
     keys = {k for k in keys if not k.startswith(ENGINE_ONLY)}
     out = {}

@@ -12,6 +12,8 @@ import pandas as pd
 from analysis.compare import compare
 from analysis.summary import TIDY_COLUMNS
 from pysim.io import atomic_write_text
+from workflows.case import read_yaml, varying_columns
+from workflows.scripts.analyse_run import PROVENANCE
 
 FAILURE_COLUMNS = ["study", "case", "engine", "seed", "error", "log", "run_dir"]
 
@@ -34,6 +36,28 @@ def failures(records: list[Path]) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=FAILURE_COLUMNS)
 
 
+def with_parameters(df: pd.DataFrame, observables: list[Path]) -> pd.DataFrame:
+    """The varying case parameters of each study as columns (``alpha``, ``sigma``,
+    ``kappa``, ...), taken from the ``case.yaml`` of every run present
+    (``<results>/<study>/<case>/seed<k>/case.yaml``), not from the columns each run's
+    analysis wrote: a variant added to a study later makes a parameter vary that the
+    older runs' tables do not have."""
+    cases: dict[str, dict[str, dict]] = {}
+    for p in observables:
+        seed_dir = Path(p).parent.parent
+        cases.setdefault(seed_dir.parent.parent.name, {})[seed_dir.parent.name] = (
+            read_yaml(seed_dir / "case.yaml"))
+    df = df.drop(columns=[c for c in df.columns
+                          if c not in TIDY_COLUMNS and c not in PROVENANCE])
+    parts = []
+    for study, g in df.groupby("study", sort=False):
+        g = g.copy()
+        for name, values in varying_columns(cases.get(study, {})).items():
+            g[name] = g["case"].map(values)
+        parts.append(g)
+    return pd.concat(parts, ignore_index=True) if parts else df
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--summary", required=True, type=Path)
@@ -42,7 +66,8 @@ def main(argv=None) -> int:
     ap.add_argument("--records", nargs="+", type=Path, required=True)
     ap.add_argument("--observables", nargs="+", type=Path, required=True)
     a = ap.parse_args(argv)
-    df = pd.concat([pd.read_csv(p) for p in a.observables], ignore_index=True)
+    df = with_parameters(pd.concat([pd.read_csv(p) for p in a.observables],
+                                   ignore_index=True), a.observables)
     extra = [c for c in df.columns if c not in TIDY_COLUMNS]
     df = df[TIDY_COLUMNS + extra].sort_values(["study", "case", "engine", "seed", "observable"])
     atomic_write_text(a.summary, df.to_csv(index=False))
