@@ -75,7 +75,7 @@ def _run(case, args) -> int:
     except ResumeError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    except BlowUpError as exc:
+    except (BlowUpError, growth.GrowthLimitError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 3
     provenance.write(args.out / "run.json",

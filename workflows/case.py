@@ -246,7 +246,8 @@ def _check_case(case: dict, source: str, at: str):
         raise ConfigError(
             f"{source}: {at}protocol.phi_init = {pr['phi_init']} cannot be reached by random "
             f"insertion in {dim}-D; use a value <= {phi_insert} and compress")
-    phi_end = {"compress": pr.get("phi_final"), "jammed": pr.get("phi_max")}.get(pr["name"], 0.75)
+    phi_end = {"compress": pr.get("phi_final"), "jammed": pr.get("phi_max"),
+               "growth": pr.get("phi_max", 0.75)}.get(pr["name"], 0.75)
     _derive_contact(case, source, at)
     _check_container(case, source, at)
     if pr["name"] == "compress":
@@ -272,6 +273,9 @@ def _check_case(case: dict, source: str, at: str):
     if pr["name"] == "growth" and pr["phi_grow"] <= pr["phi_init"]:
         raise ConfigError(f"{source}: {at}protocol.phi_grow = {pr['phi_grow']} must be above "
                           f"phi_init = {pr['phi_init']}")
+    if pr["name"] == "growth" and pr["phi_grow"] >= pr["phi_max"]:
+        raise ConfigError(f"{source}: {at}protocol.phi_grow = {pr['phi_grow']} must be below "
+                          f"phi_max = {pr['phi_max']}")
     if c.get("spine_contact") == "end_bonds" and (dim != 2 or c["friction"] > 0
                                                   or c.get("bond_number", 0) > 0):
         raise ConfigError(f"{source}: {at}contact.spine_contact = end_bonds is for 2-D "
@@ -301,10 +305,11 @@ def _check_case(case: dict, source: str, at: str):
             f"this machine's {have / 2**30:.1f} GiB; use fewer particles")
     if "container" in case:
         return
-    # the periodic box at the end must hold the longest particle plus skin twice
+    # the periodic box at the end must hold the longest particle plus the neighbour
+    # skin (0.2 of the largest diameter in every protocol) twice: the minimum image
     vol = p["n"] * particle_measure(dmean, alpha, dim)
     side = (vol / phi_end) ** (1 / dim)
-    reach = dmax * (1 + alpha) * 1.2
+    reach = dmax * (1 + alpha) + 0.2 * dmax
     if side < 2.0 * reach:
         n_min = math.ceil(p["n"] * (2.0 * reach / side) ** dim)
         raise ConfigError(

@@ -6,8 +6,8 @@
 2. **Relax / increment**: relax with FIRE (forces and torques below
    ``force_tol * k_n D``). A relaxed packing whose elastic energy per particle is below
    ``energy_tol * k_n D^2`` is *unjammed*, otherwise *jammed*. While unjammed, grow by
-   ``increment`` (rescaling the particles) and relax again; a jammed packing at
-   ``phi_grow`` is shrunk by ``increment`` steps instead.
+   ``increment`` (rescaling the particles) and relax again, up to ``phi_max``; a jammed
+   packing at ``phi_grow`` is shrunk by ``increment`` steps instead.
 3. **Bisect** between the last unjammed (``phi_lo``) and the first jammed (``phi_hi``)
    packing fraction, always restarting from the relaxed unjammed packing, until
    ``phi_hi - phi_lo < tolerance``; ``phi_J = phi_hi``.
@@ -31,6 +31,10 @@ from pysim.protocols.output import RunFiles
 from pysim.simulation import BlowUpError, Simulation
 
 CYCLES_HEADER = "# step phi pe_per_particle pressure n_contacts jammed\n"
+
+
+class GrowthLimitError(RuntimeError):
+    """The cycles would grow the packing past ``protocol.phi_max`` without jamming."""
 
 
 def _relax(sim: Simulation, p: dict, k_n: float, d_mean: float) -> tuple[float, bool]:
@@ -110,6 +114,11 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
             phi = s.packing_fraction()
             if drv["hi"] is None:  # unjammed so far: grow by the increment
                 target = phi + drv["increment"]
+                if target > p.get("phi_max", 0.75):
+                    raise GrowthLimitError(
+                        f"growth reached phi = {phi:.4f} without jamming and the next "
+                        f"increment passes protocol.phi_max = {p.get('phi_max', 0.75)}; "
+                        f"raise phi_max (the box must then hold more particles)")
             elif drv["lo"] is None:  # jammed from the start: shrink by the increment
                 target = phi - drv["increment"]
             else:  # bisect from the relaxed unjammed packing

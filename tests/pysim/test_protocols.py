@@ -48,6 +48,28 @@ def test_growth_to_jamming_of_spheres(tmp_path):
     assert set(cycles.step) <= steps
 
 
+def test_growth_stops_at_phi_max(tmp_path):
+    """Cycles that would grow the packing past protocol.phi_max without jamming stop with
+    an error that names the bound (spheres jam near 0.64, far above 0.52)."""
+    case = validate_case({
+        "particles": {"n": 150, "diameter": {"mean": 1.0}},
+        "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 10.0, "gamma_bg": 0.1},
+        "protocol": {"name": "growth", "phi_init": 0.3, "rate": 0.1, "phi_grow": 0.5,
+                     "phi_max": 0.52, "dt": 1e-4, "increment": 0.01},
+        "output": {"thermo_every": 1000, "dump_every": 5000}, "seed": 2})
+    cp = tmp_path / "case.yaml"
+    cp.write_text(yaml.safe_dump(case))
+    write_initial(case, tmp_path / "init.data")
+    r = subprocess.run([sys.executable, "-m", "pysim", "run", str(cp), "--data",
+                        str(tmp_path / "init.data"), "--out", str(tmp_path / "out"),
+                        "--no-progress"], capture_output=True, text=True)
+    assert r.returncode == 3
+    assert "passes protocol.phi_max = 0.52" in r.stderr and "raise phi_max" in r.stderr
+    cycles = pd.read_csv(tmp_path / "out" / "cycles.dat.part", sep=r"\s+", comment="#",
+                         header=None, names=["step", "phi", "e", "p", "nc", "jammed"])
+    assert (cycles.jammed == 0).all() and cycles.phi.max() <= 0.52 + 1e-9
+
+
 def test_rods_compress_writes_axes_and_lengths(tmp_path):
     out = run_case(tmp_path, {
         "particles": {"n": 120, "aspect_ratio": 1.5, "diameter": {"mean": 1.0}},

@@ -177,3 +177,24 @@ def test_variant_errors_name_the_variant():
         validate_config({"studies": {"s": study}}, "cfg.yaml")
     assert str(exc.value) == ("cfg.yaml: studies.s.variants.fast.protocol.rate = -1 is not "
                               "allowed; use a number > 0")
+
+
+def test_growth_box_is_checked_up_to_phi_max():
+    """Long rods jam far below 0.75: growth's phi_max bounds the box check, so fewer rods
+    fill it, and phi_grow must lie below it."""
+    rods = {"particles": {"n": 1000, "aspect_ratio": 11.0, "diameter": {"mean": 1.0}},
+            "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 10.0, "gamma_bg": 0.1},
+            "protocol": {"name": "growth", "phi_init": 0.05, "rate": 0.05, "phi_grow": 0.3,
+                         "dt": 1e-4},
+            "seed": 1}
+    with pytest.raises(ConfigError, match=r"particles.n = 1000 is too small for a periodic box "
+                                          r"at packing fraction 0.75 \(side 23 < twice"):
+        validate_case(copy.deepcopy(rods), "case.yaml")
+    ok = copy.deepcopy(rods)
+    ok["protocol"]["phi_max"] = 0.45  # side 27.3 > 2 (L + D + 0.2 D) = 24.4
+    assert validate_case(ok, "case.yaml")["protocol"]["phi_max"] == 0.45
+    bad = copy.deepcopy(ok)
+    bad["protocol"]["phi_grow"] = 0.5
+    with pytest.raises(ConfigError, match=r"^case.yaml: protocol.phi_grow = 0.5 must be below "
+                                          r"phi_max = 0.45$"):
+        validate_case(bad, "case.yaml")
