@@ -204,10 +204,12 @@ def trends(summary, parameter, observables, out, title=None, references=None, se
                 ax.errorbar(st[parameter], st["mean"], yerr=st["std"].fillna(0), capsize=3,
                             ms=4, **style)
         lo, hi = s[parameter].min(), s[parameter].max()
-        for label, x, y in (references or {}).get(o, []):
+        for k, (label, x, y) in enumerate((references or {}).get(o, [])):
             keep = (np.asarray(x) >= lo) & (np.asarray(x) <= hi)  # theory only where data are
-            if keep.any():
-                ax.plot(np.asarray(x)[keep], np.asarray(y)[keep], "k--", lw=0.8, label=label)
+            if keep.any():  # black, one line style per reference curve
+                ax.plot(np.asarray(x)[keep], np.asarray(y)[keep], color="k",
+                        ls=["--", ":", "-."][k % 3], marker="x" if len(keep) < 30 else None,
+                        ms=4, lw=0.8, label=label)
         ax.set_xlabel(parameter)
         if lo > 0 and hi / lo > 50:  # e.g. compression rates over decades
             ax.set_xscale("log")

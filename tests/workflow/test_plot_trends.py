@@ -1,5 +1,6 @@
 """The trends figure keeps runs of another protocol (LIGGGHTS' settled rod beds) apart
 from the study's compressions, so that no line joins the two."""
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -64,3 +65,18 @@ def test_deposits_draw_one_line_per_bond_number(tmp_path, monkeypatch):
     with pytest.raises(ValueError, match="series 'nope'"):
         plot_trends.main(["--summary", str(summary), "--study", "dep", "--parameter", "alpha",
                           "--series", "nope", "--out", str(tmp_path / "t.png")])
+
+
+def test_3d_rods_get_theory_and_caging_number(tmp_path, monkeypatch):
+    """3-D packings versus alpha carry the random contact equation and its thin-rod limit
+    on phi_J, and the isostatic count and the caging number (computed at the study's
+    aspect ratios: a sphere needs 7 contacts) on z_J."""
+    refs = plot_trends.references("alpha", 3, alphas=[0.0, 4.0])
+    assert [r[0] for r in refs["phi_j"]] == ["random contact eq., <C> = 10",
+                                             "thin-rod limit, phi alpha = 5"]
+    label, x, y = refs["phi_j"][1]
+    assert np.allclose(x * y, 5.0)
+    (iso, _, _), (cage, ca, cn) = refs["z_j"]
+    assert cage == "caging number" and list(ca) == [0.0, 4.0]
+    assert abs(cn[0] - 7.0) < 0.6 and 9.0 < cn[1] < 11.5  # 200 trials: stderr ~0.2
+    assert "z_j" not in plot_trends.references("alpha", 2) and plot_trends.references("sigma", 3) == {}

@@ -19,11 +19,30 @@ OBSERVABLES = ["phi_j", "z_j", "z_j_bonds", "s_nematic_j", "sqrt_n_s2", "sqrt_n_
 DEPOSIT_OBSERVABLES = ["phi_deposit", "angle_mean", "k_ratio", "h_s_vv"]
 
 
-def references(parameter: str, dimension: int) -> dict:
+#: random contacts per caging-number estimate on the trends figure (about 3 s per aspect
+#: ratio; standard error ~0.25 contact)
+CAGING_TRIALS = 200
+
+
+def caging_curve(alphas) -> tuple[np.ndarray, np.ndarray]:
+    """Caging number of 3-D spherocylinders at the aspect ratios ``alphas``
+    (:class:`analysis.caging.CagingNumber`: random contacts until the translations, and
+    for rods the rotations perpendicular to the axis, are blocked; fixed seed)."""
+    from analysis.caging import CagingNumber
+
+    a = np.unique(np.asarray(alphas, dtype=float))
+    c = [CagingNumber(radius=0.5, length=float(x), dim=3, trials=CAGING_TRIALS,
+                      seed=20261124).compute().mean for x in a]
+    return a, np.asarray(c)
+
+
+def references(parameter: str, dimension: int, alphas=()) -> dict:
     """Theory on the observables' axes: isostatic counts and, in 3-D, the random contact
-    equation phi = <C> V / V_excl evaluated at the isostatic <C>; for deposits the mean
-    angle to the horizontal of isotropic orientations (3-D: ``pi/2 - 1`` rad = 32.7 deg,
-    2-D: 45 deg) and the isotropic stress ratio ``K = 1``."""
+    equation phi = <C> V / V_excl evaluated at the isostatic <C> (alpha >= 3) with its
+    thin-rod limit ``phi alpha = <C>/2`` (alpha >= 10), and the caging number at the study's aspect ratios ``alphas``
+    beside the contact numbers; for deposits the mean angle to the horizontal of
+    isotropic orientations (3-D: ``pi/2 - 1`` rad = 32.7 deg, 2-D: 45 deg) and the
+    isotropic stress ratio ``K = 1``."""
     if parameter != "alpha":
         return {}
     a = np.linspace(0.0, 20.0, 201)
@@ -38,8 +57,15 @@ def references(parameter: str, dimension: int) -> dict:
     z_iso = np.where(a > 0, theory.isostatic_z(3, True), theory.isostatic_z(3, False))
     thick = a >= 3  # the random contact equation holds for slender rods
     phi_rce = np.array([theory.rce_packing_fraction(10.0, ai) for ai in a[thick]])
-    return {"z_j": [("isostatic 2 d_f", a, z_iso)],
-            "phi_j": [("random contact eq., <C> = 10", a[thick], phi_rce)], **deposit}
+    z_refs = [("isostatic 2 d_f", a, z_iso)]
+    if len(alphas):
+        ca, cn = caging_curve(alphas)
+        z_refs.append(("caging number", ca, cn))
+    thin = a >= 10  # its thin-rod limit only for long rods (at alpha 4 it is 1.25)
+    return {"z_j": z_refs,
+            "phi_j": [("random contact eq., <C> = 10", a[thick], phi_rce),
+                      ("thin-rod limit, phi alpha = 5", a[thin],
+                       theory.thin_rod_limit(10.0, a[thin]))], **deposit}
 
 
 def label_protocols(df: pd.DataFrame) -> pd.DataFrame:
@@ -72,8 +98,11 @@ def main(argv=None) -> int:
     df = df[df.study == a.study]
     if a.protocol != "deposit":  # there 'settled' is the settling test, no other protocol
         df = label_protocols(df)
+    # the caging number beside the jammed contact numbers of 3-D packings, not deposits
+    alphas = (df["alpha"].dropna().unique() if a.parameter == "alpha" and "alpha" in df
+              and a.protocol != "deposit" and (df.observable == "z_j").any() else ())
     plots.trends(df, a.parameter, OBSERVABLES + DEPOSIT_OBSERVABLES, a.out, title=a.study,
-                 references=references(a.parameter, a.dimension), series=a.series)
+                 references=references(a.parameter, a.dimension, alphas), series=a.series)
     return 0
 
 
