@@ -114,10 +114,10 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
             phi = s.packing_fraction()
             if drv["hi"] is None:  # unjammed so far: grow by the increment
                 target = phi + drv["increment"]
-                if target > p.get("phi_max", 0.75):
+                if target > p["phi_max"]:
                     raise GrowthLimitError(
                         f"growth reached phi = {phi:.4f} without jamming and the next "
-                        f"increment passes protocol.phi_max = {p.get('phi_max', 0.75)}; "
+                        f"increment passes protocol.phi_max = {p['phi_max']}; "
                         f"raise phi_max (the box must then hold more particles)")
             elif drv["lo"] is None:  # jammed from the start: shrink by the increment
                 target = phi - drv["increment"]

@@ -67,7 +67,7 @@ def test_deposits_draw_one_line_per_bond_number(tmp_path, monkeypatch):
                           "--series", "nope", "--out", str(tmp_path / "t.png")])
 
 
-def test_3d_rods_get_theory_and_caging_number(tmp_path, monkeypatch):
+def test_3d_rods_get_theory_and_caging_number():
     """3-D packings versus alpha carry the random contact equation and its thin-rod limit
     on phi_J, and the isostatic count and the caging number (computed at the study's
     aspect ratios: a sphere needs 7 contacts) on z_J."""
