@@ -39,10 +39,10 @@ def caging_curve(alphas) -> tuple[np.ndarray, np.ndarray]:
 def references(parameter: str, dimension: int, alphas=()) -> dict:
     """Theory on the observables' axes: isostatic counts and, in 3-D, the random contact
     equation phi = <C> V / V_excl evaluated at the isostatic <C> (alpha >= 3) with its
-    thin-rod limit ``phi alpha = <C>/2`` (alpha >= 10), and the caging number at the study's aspect ratios ``alphas``
-    beside the contact numbers; for deposits the mean angle to the horizontal of
-    isotropic orientations (3-D: ``pi/2 - 1`` rad = 32.7 deg, 2-D: 45 deg) and the
-    isotropic stress ratio ``K = 1``."""
+    thin-rod limit ``phi alpha = <C>/2`` (alpha >= 10), and the caging number at the
+    study's aspect ratios ``alphas`` beside the contact numbers; for deposits the mean
+    angle to the horizontal of isotropic orientations (3-D: ``pi/2 - 1`` rad = 32.7 deg,
+    2-D: 45 deg) and the isotropic stress ratio ``K = 1``."""
     if parameter != "alpha":
         return {}
     a = np.linspace(0.0, 20.0, 201)
