@@ -31,6 +31,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from pysim import integrators as itg
+from pysim.jit import njit
 from pysim.rotation import quaternions_from_axes
 
 
@@ -56,6 +57,7 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
     n = s.n
     rods = np.flatnonzero(sim.half > 0.0)
     scale = sim.half[rods][:, None]
+    scale_r = np.ascontiguousarray(scale[:, 0])
     nx = n * dim
     free = (itg.GAMMA_BG, itg.GAMMA_ROT, *range(itg.EPS_X, itg.GROWTH + 1))
     saved = sim.sys[list(free)].copy()
@@ -64,28 +66,19 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
     s.omega[:] = 0.0
     last = {"z": None, "fmax": np.inf, "tmax": np.inf}
 
+    w_norm = np.empty(len(rods))  # |w_k| of the rods' free vectors
+
     def energy(zs):
-        z = h * zs  # lengths
-        s.x[:, :dim] = z[:nx].reshape(n, dim)
-        itg.wrap(s.x, s.box, s.periodic)
-        w = z[nx:].reshape(len(rods), dim) / scale
-        norm = np.linalg.norm(w, axis=1)
-        if len(rods):
-            s.u[rods, :dim] = w / norm[:, None]
-            s.u[rods, dim:] = 0.0  # 2-D: spines exactly in the plane
+        set_coordinates(zs, h, s.x, s.u, rods, scale_r, dim, s.box, s.periodic, w_norm)
         sim._set_pairs(itg.maybe_rebuild(s.x, s.u, s.box, s.periodic, sim.r_int, sim.half,
                                          sim.sys, *sim._pairs(), sim.x_ref, sim.u_ref,
                                          sim.box_ref)[:7])
         sim.compute_forces()
-        last.update(z=zs.copy(), fmax=float(np.sqrt(np.max(np.sum(sim.f**2, axis=1)))),
-                    tmax=float(np.sqrt(np.max(np.sum(sim.torque**2, axis=1)))))
-        grad = np.empty_like(z)
-        grad[:nx] = -sim.f[:, :dim].ravel()
-        if len(rods):
-            gw = np.cross(s.u[rods], sim.torque[rods]) / norm[:, None]
-            grad[nx:] = (gw[:, :dim] / scale).ravel()
-        last["grad_norm"] = float(np.linalg.norm(grad))
-        return c * sim._pe, (c * h) * grad
+        grad = np.empty_like(zs)
+        fmax, tmax = gradient(sim.f, sim.torque, s.u, rods, w_norm, scale_r, dim, grad)
+        last.update(z=zs.copy(), fmax=fmax, tmax=tmax, grad_norm=float(np.linalg.norm(grad)))
+        grad *= c * h
+        return c * sim._pe, grad
 
     def at(z):
         if last["z"] is None or not np.array_equal(z, last["z"]):
@@ -143,3 +136,56 @@ def _mean_overlap(sim) -> float:
     _, rec = sim.contact_table()
     touching = rec[:, 6] > 0.0
     return float(rec[touching, 6].mean()) if touching.any() else 1.0
+
+
+@njit
+def set_coordinates(zs, h, x, u, rods, scale, dim, box, periodic, norm):
+    """Positions and spine directions from L-BFGS' coordinates ``zs`` (in units of ``h``):
+    ``x_i = h z`` (wrapped into the box) and, for rod ``k`` (particle ``rods[k]``),
+    ``w = h z / l_k``, ``u = w / |w|`` (out-of-plane components 0 in 2-D); ``norm[k]``
+    receives ``|w|``. The same arithmetic, in the same order, as NumPy's vector forms."""
+    n = x.shape[0]
+    nx = n * dim
+    for i in range(n):
+        for k in range(dim):
+            x[i, k] = h * zs[i * dim + k]
+    itg.wrap(x, box, periodic)
+    w = np.empty(3)
+    for r in range(rods.shape[0]):
+        s2 = 0.0
+        for k in range(dim):
+            w[k] = h * zs[nx + r * dim + k] / scale[r]
+            s2 += w[k] * w[k]
+        nr = np.sqrt(s2)
+        norm[r] = nr
+        i = rods[r]
+        for k in range(dim):
+            u[i, k] = w[k] / nr
+        for k in range(dim, 3):
+            u[i, k] = 0.0
+
+
+@njit
+def gradient(f, torque, u, rods, norm, scale, dim, grad):
+    """``grad`` of the energy in L-BFGS' coordinates before their scaling: ``-F_i`` for the
+    centres and ``(u x tau) / (|w| l)`` for the rods' free vectors (module docstring).
+    Returns ``(max |F|, max |tau|)`` over all particles."""
+    n = f.shape[0]
+    nx = n * dim
+    fmax = 0.0
+    tmax = 0.0
+    for i in range(n):
+        for k in range(dim):
+            grad[i * dim + k] = -f[i, k]
+        fmax = max(fmax, f[i, 0] * f[i, 0] + f[i, 1] * f[i, 1] + f[i, 2] * f[i, 2])
+        tmax = max(tmax, torque[i, 0] * torque[i, 0] + torque[i, 1] * torque[i, 1]
+                   + torque[i, 2] * torque[i, 2])
+    c = np.empty(3)
+    for r in range(rods.shape[0]):
+        i = rods[r]
+        c[0] = u[i, 1] * torque[i, 2] - u[i, 2] * torque[i, 1]
+        c[1] = u[i, 2] * torque[i, 0] - u[i, 0] * torque[i, 2]
+        c[2] = u[i, 0] * torque[i, 1] - u[i, 1] * torque[i, 0]
+        for k in range(dim):
+            grad[nx + r * dim + k] = c[k] / norm[r] / scale[r]
+    return np.sqrt(fmax), np.sqrt(tmax)

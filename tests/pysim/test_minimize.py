@@ -130,3 +130,49 @@ def test_lbfgs_turns_nearly_round_rods():
     t0 = np.linalg.norm(sim.torque, axis=1).max()
     it, fmax, tmax = lbfgs(sim, f_tol=1e-30, max_iter=2000)
     assert fmax < 1e-7 * f0 and tmax < 2e-7 * t0, (it, fmax / f0, tmax / t0)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_coordinate_and_gradient_kernels_match_numpy(dim, rng):
+    """``set_coordinates`` and ``gradient`` (the kernels of L-BFGS' energy function) give
+    the bits of the NumPy vector forms they replace, on random inputs: positions
+    ``h z`` wrapped into the box, spines ``w / |w|`` with ``w = h z / l``, the gradient
+    ``-F`` and ``(u x tau) / (|w| l)``, and the largest force and torque."""
+    from pysim import integrators as itg
+    from pysim.minimize import gradient, set_coordinates
+
+    n, rods = 40, np.array([1, 4, 5, 17, 30, 39])
+    box = np.array([7.0, 6.0, 5.0 if dim == 3 else 1.0])
+    periodic = np.array([True, True, dim == 3])
+    scale = rng.uniform(0.05, 2.0, len(rods))
+    h = 0.37
+    zs = rng.normal(0.0, 10.0, n * dim + len(rods) * dim)
+    x = np.zeros((n, 3))
+    u = np.tile([0.0, 0.0, 1.0], (n, 1))
+    w_norm = np.empty(len(rods))
+    set_coordinates(zs, h, x, u, rods, scale, dim, box, periodic, w_norm)
+    z = h * zs
+    x_ref = np.zeros((n, 3))
+    x_ref[:, :dim] = z[:n * dim].reshape(n, dim)
+    itg.wrap(x_ref, box, periodic)
+    w = z[n * dim:].reshape(len(rods), dim) / scale[:, None]
+    norm = np.linalg.norm(w, axis=1)
+    u_ref = np.tile([0.0, 0.0, 1.0], (n, 1))
+    u_ref[rods, :dim] = w / norm[:, None]
+    u_ref[rods, dim:] = 0.0
+    np.testing.assert_array_equal(x, x_ref)
+    np.testing.assert_array_equal(u, u_ref)
+    np.testing.assert_array_equal(w_norm, norm)
+    assert np.all((x[:, :dim] >= 0) & (x[:, :dim] < box[:dim]))
+
+    f = rng.normal(size=(n, 3))
+    torque = rng.normal(size=(n, 3))
+    grad = np.empty_like(zs)
+    fmax, tmax = gradient(f, torque, u, rods, w_norm, scale, dim, grad)
+    g_ref = np.empty_like(zs)
+    g_ref[:n * dim] = -f[:, :dim].ravel()
+    gw = np.cross(u[rods], torque[rods]) / norm[:, None]
+    g_ref[n * dim:] = (gw[:, :dim] / scale[:, None]).ravel()
+    np.testing.assert_array_equal(grad, g_ref)
+    assert fmax == np.sqrt(np.max(np.sum(f**2, axis=1)))
+    assert tmax == np.sqrt(np.max(np.sum(torque**2, axis=1)))
