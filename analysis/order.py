@@ -198,3 +198,30 @@ class OrientationCorrelation(Observable):
             q = np.where(cnt > 0, tot / np.maximum(cnt, 1), np.nan)
         self._set(edges=edges, centers=0.5 * (edges[1:] + edges[:-1]), q=q, counts=cnt)
         return self
+
+
+def finite_size_order(curves, phi_min: float = 0.0):
+    """Finite-size scaling of the 2-D orientational order along compressions.
+
+    ``curves``: a table (pandas) with one row per frame and columns ``alpha``, ``n``,
+    ``seed``, ``phi``, ``sqrt_n_s2``, ``sqrt_n_s4`` (:func:`analysis.summary.frame_curves`
+    with the run's aspect ratio and seed). Over the frames with ``phi >= phi_min``, per
+    aspect ratio and particle number: ``frames``, ``seeds``, ``mean_s2`` (``<S_2>``),
+    ``mean_sqrt_n_s2`` and ``rms_sqrt_n_s2`` (``sqrt(<N S_2^2>)``), and the same for
+    ``S_4``. A disordered state has ``S_n ~ 1/sqrt(N)``: ``sqrt(N) S_n`` stays of order 1 as
+    N grows, and ``<N S_n^2> = 1`` exactly for independent uniform angles, while an
+    ordered one has ``S_n`` independent of N (``sqrt(N) S_n`` grows as ``sqrt(N)``)."""
+    import pandas as pd
+
+    df = curves[(curves.phi >= phi_min) & curves.sqrt_n_s2.notna()]
+    rows = []
+    for (alpha, n), g in df.groupby(["alpha", "n"], sort=True):
+        row = {"alpha": float(alpha), "n": int(n), "frames": len(g),
+               "seeds": int(g.seed.nunique())}
+        for k in ("s2", "s4"):
+            x = g[f"sqrt_n_{k}"].to_numpy(dtype=float)
+            row[f"mean_{k}"] = float(np.mean(x) / np.sqrt(n))
+            row[f"mean_sqrt_n_{k}"] = float(np.mean(x))
+            row[f"rms_sqrt_n_{k}"] = float(np.sqrt(np.mean(x * x)))
+        rows.append(row)
+    return pd.DataFrame(rows)

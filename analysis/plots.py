@@ -490,3 +490,49 @@ def pressure_by_variant(runs, out, p_scale=1.0, parameter=None):
         ax.set_ylim(bottom=max(min(lo) / 2, 1e-9))
     ax.legend(fontsize=7)
     _save(fig, out)
+
+
+def order_scaling(curves, table, out):
+    """``sqrt(N) S_2`` (filled) and ``sqrt(N) S_4`` (open) versus packing fraction along
+    2-D compressions, one panel per aspect ratio and one colour per particle number N,
+    every seed drawn; the dotted line is 1, the rms value for independent uniform
+    angles. A lower row draws ``S_2`` itself against N with the ``1/sqrt(N)`` law through
+    the smallest N. ``curves``/``table``: as :func:`analysis.order.finite_size_order`."""
+    alphas = sorted(curves.alpha.unique())
+    ns = sorted(curves.n.unique())
+    cmap = plt.get_cmap("viridis", max(len(ns) + 1, 2))
+    colour = {n: cmap(k) for k, n in enumerate(ns)}
+    fig, axes = plt.subplots(2, len(alphas), figsize=(4.2 * len(alphas), 7.6), squeeze=False)
+    for j, alpha in enumerate(alphas):
+        ax = axes[0, j]
+        for (n, seed), g in curves[curves.alpha == alpha].groupby(["n", "seed"], sort=True):
+            g = g.sort_values("phi")
+            label = f"N = {n}" if seed == min(curves[(curves.alpha == alpha) &
+                                                      (curves.n == n)].seed) else None
+            ax.plot(g.phi, g.sqrt_n_s2, marker="o", ms=3, lw=0.8, color=colour[n], label=label)
+            ax.plot(g.phi, g.sqrt_n_s4, marker="o", ms=3, lw=0.5, mfc="none", ls="--",
+                    color=colour[n])
+        ax.axhline(1.0, color="k", lw=0.6, ls=":")
+        ax.set_title(f"alpha = {alpha:g}", fontsize=9)
+        ax.set_xlabel(r"packing fraction $\phi$")
+        ax.set_ylim(bottom=0)
+        if j == 0:
+            ax.set_ylabel(r"$\sqrt{N} S_2$ (filled), $\sqrt{N} S_4$ (open)")
+        ax.legend(fontsize=7)
+        ax = axes[1, j]
+        t = table[table.alpha == alpha].sort_values("n")
+        if len(t):
+            ax.loglog(t.n, t.mean_s2, marker="o", color="k", label=r"$\langle S_2 \rangle$")
+            ax.loglog(t.n, t.mean_s4, marker="o", mfc="none", color="k", ls="--",
+                      label=r"$\langle S_4 \rangle$")
+            n0 = float(t.n.iloc[0])
+            ref = float(max(t.mean_s2.iloc[0], t.mean_s4.iloc[0]))
+            ax.loglog(t.n, ref * np.sqrt(n0 / t.n), color="grey", lw=0.8, ls=":",
+                      label=r"$\propto 1/\sqrt{N}$")
+        ax.set_xlabel("particles N")
+        if j == 0:
+            ax.set_ylabel("order parameter, mean over the frames")
+        ax.legend(fontsize=7)
+    fig.suptitle("orientational order of the compressed packings: disorder gives "
+                 r"$S_n \sim 1/\sqrt{N}$", fontsize=10)
+    _save(fig, out)

@@ -87,6 +87,11 @@ def get_final_output():
             for c in cases
         ) and any(r.study == study and r.engine == "pysim" for r in RUNS):
             out.append(f"{RESULTS}/{study}/figures/modes.png")  # dynamical matrix
+        if protocol[study] == "compress" and len({c["particles"]["n"] for c in cases}) > 1 and all(
+            c["particles"].get("dimension", 3) == 2 and c["particles"]["aspect_ratio"] > 0
+            for c in cases
+        ):
+            out.append(f"{RESULTS}/{study}/figures/order_scaling.png")  # S_n ~ 1/sqrt(N)
         if (protocol[study] == "compress" and len({k[1] for k in CFG["_cases"] if k[0] == study}) > 1):
             out.append(f"{RESULTS}/{study}/figures/pressure_variants.png")  # p(phi) overlaid
     for study, variant in study_variants():

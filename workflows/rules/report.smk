@@ -145,6 +145,27 @@ rule plot_modes:
         " --table {output.table} 2> {log}"
 
 
+rule plot_order:
+    input:
+        lambda wc: [
+            f"{d}/{name}" for d in run_dirs(wc.study) for name in ("curves.csv", "run.json")
+        ],
+    output:
+        figure=report(
+            f"{RESULTS}/{{study}}/figures/order_scaling.png",
+            caption="../report/order_scaling.rst",
+            category="{study}",
+        ),
+        table=f"{RESULTS}/{{study}}/order_scaling.csv",
+    log:
+        f"{RESULTS}/{{study}}/figures/order_scaling.log",
+    params:
+        runs=lambda wc: " ".join(run_dirs(wc.study)),
+    shell:
+        "{PYTHON} -m workflows.scripts.plot_order --runs {params.runs} --out {output.figure}"
+        " --table {output.table} 2> {log}"
+
+
 rule plot_pressures:
     input:
         lambda wc: [
