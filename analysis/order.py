@@ -205,23 +205,30 @@ def finite_size_order(curves, phi_min: float = 0.0):
 
     ``curves``: a table (pandas) with one row per frame and columns ``alpha``, ``n``,
     ``seed``, ``phi``, ``sqrt_n_s2``, ``sqrt_n_s4`` (:func:`analysis.summary.frame_curves`
-    with the run's aspect ratio and seed). Over the frames with ``phi >= phi_min``, per
-    aspect ratio and particle number: ``frames``, ``seeds``, ``mean_s2`` (``<S_2>``),
-    ``mean_sqrt_n_s2`` and ``rms_sqrt_n_s2`` (``sqrt(<N S_2^2>)``), and the same for
-    ``S_4``. A disordered state has ``S_n ~ 1/sqrt(N)``: ``sqrt(N) S_n`` stays of order 1 as
-    N grows, and ``<N S_n^2> = 1`` exactly for independent uniform angles, while an
-    ordered one has ``S_n`` independent of N (``sqrt(N) S_n`` grows as ``sqrt(N)``)."""
+    with the run's aspect ratio and seed). Each run (seed) gives one sample: the mean of
+    ``sqrt(N) S_n`` over its frames with ``phi >= phi_min`` (the frames of one run are
+    strongly correlated: the orientations of the start persist). Per aspect ratio and
+    particle number: ``seeds``, ``frames``, ``mean_sqrt_n_s2`` and its standard error
+    over the seeds ``sem_sqrt_n_s2``, ``rms_sqrt_n_s2`` (root mean square of the
+    samples), ``mean_s2`` (``<S_2>`` = ``mean_sqrt_n_s2 / sqrt(N)``) and ``sem_s2``, and
+    the same for ``S_4``. A disordered state has ``S_n ~ 1/sqrt(N)``: ``sqrt(N) S_n`` stays
+    of order 1 as N grows (independent uniform angles: mean ``sqrt(pi)/2``, rms 1),
+    while an ordered one keeps ``S_n`` (``sqrt(N) S_n`` grows as ``sqrt(N)``)."""
     import pandas as pd
 
     df = curves[(curves.phi >= phi_min) & curves.sqrt_n_s2.notna()]
     rows = []
     for (alpha, n), g in df.groupby(["alpha", "n"], sort=True):
-        row = {"alpha": float(alpha), "n": int(n), "frames": len(g),
-               "seeds": int(g.seed.nunique())}
-        for k in ("s2", "s4"):
-            x = g[f"sqrt_n_{k}"].to_numpy(dtype=float)
-            row[f"mean_{k}"] = float(np.mean(x) / np.sqrt(n))
-            row[f"mean_sqrt_n_{k}"] = float(np.mean(x))
-            row[f"rms_sqrt_n_{k}"] = float(np.sqrt(np.mean(x * x)))
+        runs = g.groupby("seed")[["sqrt_n_s2", "sqrt_n_s4"]].mean()
+        k = len(runs)
+        row = {"alpha": float(alpha), "n": int(n), "seeds": k, "frames": len(g)}
+        for m in ("s2", "s4"):
+            x = runs[f"sqrt_n_{m}"].to_numpy(dtype=float)
+            sem = float(np.std(x, ddof=1) / np.sqrt(k)) if k > 1 else float("nan")
+            row[f"mean_sqrt_n_{m}"] = float(np.mean(x))
+            row[f"sem_sqrt_n_{m}"] = sem
+            row[f"rms_sqrt_n_{m}"] = float(np.sqrt(np.mean(x * x)))
+            row[f"mean_{m}"] = float(np.mean(x) / np.sqrt(n))
+            row[f"sem_{m}"] = sem / float(np.sqrt(n))
         rows.append(row)
     return pd.DataFrame(rows)

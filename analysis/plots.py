@@ -496,8 +496,9 @@ def order_scaling(curves, table, out):
     """``sqrt(N) S_2`` (filled) and ``sqrt(N) S_4`` (open) versus packing fraction along
     2-D compressions, one panel per aspect ratio and one colour per particle number N,
     every seed drawn; the dotted line is 1, the rms value for independent uniform
-    angles. A lower row draws ``S_2`` itself against N with the ``1/sqrt(N)`` law through
-    the smallest N. ``curves``/``table``: as :func:`analysis.order.finite_size_order`."""
+    angles. A lower row draws ``<S_2>`` and ``<S_4>`` (over the seeds, with their standard
+    errors) against N with the ``1/sqrt(N)`` law through the smallest N.
+    ``curves``/``table``: as :func:`analysis.order.finite_size_order`."""
     alphas = sorted(curves.alpha.unique())
     ns = sorted(curves.n.unique())
     cmap = plt.get_cmap("viridis", max(len(ns) + 1, 2))
@@ -522,16 +523,19 @@ def order_scaling(curves, table, out):
         ax = axes[1, j]
         t = table[table.alpha == alpha].sort_values("n")
         if len(t):
-            ax.loglog(t.n, t.mean_s2, marker="o", color="k", label=r"$\langle S_2 \rangle$")
-            ax.loglog(t.n, t.mean_s4, marker="o", mfc="none", color="k", ls="--",
-                      label=r"$\langle S_4 \rangle$")
+            ax.errorbar(t.n, t.mean_s2, yerr=t.sem_s2, marker="o", color="k", capsize=3,
+                        label=r"$\langle S_2 \rangle$")
+            ax.errorbar(t.n, t.mean_s4, yerr=t.sem_s4, marker="o", mfc="none", color="k",
+                        ls="--", capsize=3, label=r"$\langle S_4 \rangle$")
+            ax.set_xscale("log")
+            ax.set_yscale("log")
             n0 = float(t.n.iloc[0])
             ref = float(max(t.mean_s2.iloc[0], t.mean_s4.iloc[0]))
             ax.loglog(t.n, ref * np.sqrt(n0 / t.n), color="grey", lw=0.8, ls=":",
                       label=r"$\propto 1/\sqrt{N}$")
         ax.set_xlabel("particles N")
         if j == 0:
-            ax.set_ylabel("order parameter, mean over the frames")
+            ax.set_ylabel("order parameter, mean over the seeds")
         ax.legend(fontsize=7)
     fig.suptitle("orientational order of the compressed packings: disorder gives "
                  r"$S_n \sim 1/\sqrt{N}$", fontsize=10)

@@ -148,34 +148,40 @@ def test_2d_order_refuses_3d_frames():
 
 
 def test_finite_size_order_separates_disorder_from_order(rng):
-    """``finite_size_order`` on frames of independent uniform angles: ``rms sqrt(N) S_n``
-    is 1 at every N and ``<S_2>`` falls as ``1/sqrt(N)``; frames of rods aligned within a
-    fixed spread keep ``S_2`` (and ``sqrt(N) S_2`` grows as ``sqrt(N)``). Frames below
-    ``phi_min`` and frames without rods (NaN order) are left out."""
+    """``finite_size_order`` takes one sample per run (the mean over its dense frames):
+    runs of independent uniform angles give ``sqrt(N) S_n`` with rms 1 and mean
+    ``sqrt(pi)/2`` at every N, so ``<S_2>`` falls as ``1/sqrt(N)``; runs of rods aligned
+    within a fixed spread keep ``S_2`` (``sqrt(N) S_2`` grows as ``sqrt(N)``). Frames
+    below ``phi_min`` and frames without rods (NaN order) are left out."""
     import pandas as pd
 
     from analysis.order import finite_size_order
 
     rows = []
     for n in (256, 1024, 4096):
-        for k in range(300):
+        for seed in range(400):
             for alpha, theta in ((1.0, rng.uniform(0, 2 * np.pi, n)),
                                  (4.0, rng.normal(0.0, 0.5, n))):
                 s2 = order_parameter_2d(theta, 2)[0]
                 s4 = order_parameter_2d(theta, 4)[0]
-                rows.append({"alpha": alpha, "n": n, "seed": 1 + k % 2, "phi": 0.8,
-                             "sqrt_n_s2": np.sqrt(n) * s2, "sqrt_n_s4": np.sqrt(n) * s4})
-    rows.append({"alpha": 1.0, "n": 256, "seed": 1, "phi": 0.5, "sqrt_n_s2": 50.0,
+                for phi in (0.75, 0.8):  # two frames of one run: the same orientations
+                    rows.append({"alpha": alpha, "n": n, "seed": seed, "phi": phi,
+                                 "sqrt_n_s2": np.sqrt(n) * s2, "sqrt_n_s4": np.sqrt(n) * s4})
+    rows.append({"alpha": 1.0, "n": 256, "seed": 0, "phi": 0.5, "sqrt_n_s2": 50.0,
                  "sqrt_n_s4": 50.0})  # dilute: below phi_min
-    rows.append({"alpha": 1.0, "n": 256, "seed": 1, "phi": 0.8, "sqrt_n_s2": np.nan,
+    rows.append({"alpha": 1.0, "n": 256, "seed": 0, "phi": 0.8, "sqrt_n_s2": np.nan,
                  "sqrt_n_s4": np.nan})
     t = finite_size_order(pd.DataFrame(rows), phi_min=0.7).set_index(["alpha", "n"])
-    assert list(t.loc[1.0].frames) == [300, 300, 300] and set(t.seeds) == {2}
+    assert list(t.loc[1.0].seeds) == [400] * 3 and list(t.loc[1.0].frames) == [800] * 3
     for n in (256, 1024, 4096):
-        # 300 frames: the rms of N S^2 (mean 1, sd 1) is 1 within some 0.1
-        assert t.loc[(1.0, n), "rms_sqrt_n_s2"] == pytest.approx(1.0, abs=0.1)
-        assert t.loc[(1.0, n), "rms_sqrt_n_s4"] == pytest.approx(1.0, abs=0.1)
-        assert t.loc[(1.0, n), "mean_sqrt_n_s2"] == pytest.approx(np.sqrt(np.pi) / 2, abs=0.1)
+        # 400 samples: the rms of N S^2 (mean 1, sd 1) is 1 within some 0.1
+        for m in ("s2", "s4"):
+            assert t.loc[(1.0, n), f"rms_sqrt_n_{m}"] == pytest.approx(1.0, abs=0.1)
+            assert t.loc[(1.0, n), f"mean_sqrt_n_{m}"] == pytest.approx(np.sqrt(np.pi) / 2,
+                                                                        abs=0.08)
+            # standard error of a Rayleigh sample: sqrt((4 - pi)/4 / 400)
+            assert t.loc[(1.0, n), f"sem_sqrt_n_{m}"] == pytest.approx(
+                np.sqrt((4 - np.pi) / 4 / 400), rel=0.15)
         # a Gaussian spread of 0.5 rad: S_2 = exp(-2 0.5^2) at every N
         assert t.loc[(4.0, n), "mean_s2"] == pytest.approx(np.exp(-0.5), abs=0.02)
     assert t.loc[(1.0, 256), "mean_s2"] / t.loc[(1.0, 4096), "mean_s2"] == \

@@ -36,5 +36,9 @@ def test_order_scaling_table_and_figure(tmp_path, rng):
     # frames at phi >= 0.7 only: 10 of the 25 per run, two runs per N
     assert list(t.frames) == [2 * int(np.sum(np.linspace(0.4, 0.88, 25) >= 0.7))] * 2
     assert t.mean_s2.iloc[0] == pytest.approx(t.mean_sqrt_n_s2.iloc[0] / 16)
+    # one sample per run: the mean over its dense frames
+    dense = cv[(cv.phi >= 0.7) & (cv.n == 256)].groupby("seed").sqrt_n_s2.mean()
+    assert t.mean_sqrt_n_s2.iloc[0] == pytest.approx(dense.mean())
+    assert t.sem_sqrt_n_s2.iloc[0] == pytest.approx(dense.std(ddof=1) / np.sqrt(2))
     with pytest.raises(SystemExit, match="no successful run"):
         main(["--runs", str(runs[-1]), "--out", str(out), "--table", str(table)])
