@@ -506,10 +506,11 @@ def order_scaling(curves, table, out):
     fig, axes = plt.subplots(2, len(alphas), figsize=(4.2 * len(alphas), 7.6), squeeze=False)
     for j, alpha in enumerate(alphas):
         ax = axes[0, j]
-        for (n, seed), g in curves[curves.alpha == alpha].groupby(["n", "seed"], sort=True):
+        labelled = set()
+        for (n, _seed), g in curves[curves.alpha == alpha].groupby(["n", "seed"], sort=True):
             g = g.sort_values("phi")
-            label = f"N = {n}" if seed == min(curves[(curves.alpha == alpha) &
-                                                      (curves.n == n)].seed) else None
+            label = None if n in labelled else f"N = {n}"
+            labelled.add(n)
             ax.plot(g.phi, g.sqrt_n_s2, marker="o", ms=3, lw=0.8, color=colour[n], label=label)
             ax.plot(g.phi, g.sqrt_n_s4, marker="o", ms=3, lw=0.5, mfc="none", ls="--",
                     color=colour[n])
