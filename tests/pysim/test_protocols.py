@@ -35,7 +35,8 @@ def test_growth_to_jamming_of_spheres(tmp_path):
 
     meta = json.loads((out / "run.json").read_text())
     cycles = pd.read_csv(out / "cycles.dat", sep=r"\s+", comment="#", header=None,
-                         names=["step", "phi", "e", "p", "nc", "jammed"])
+                         names=["step", "phi", "e", "p", "nc", "jammed", "iterations",
+                                "residual"])
     assert 0.60 < meta["phi_j"] < 0.67
     assert meta["phi_j"] - meta["phi_j_low"] < 5e-4
     jammed = cycles[cycles.jammed == 1]
@@ -43,6 +44,18 @@ def test_growth_to_jamming_of_spheres(tmp_path):
     assert jammed.phi.min() == pytest.approx(meta["phi_j"])
     assert free.phi.max() == pytest.approx(meta["phi_j_low"])
     assert (jammed.e > 1e-12).all() and (free.e < 1e-12).all()
+    # FIRE iterations and residuals (largest force over the mean contact force):
+    # unjammed packings relax well inside the cap; the jammed sphere packing at phi_J is
+    # force-balanced (measured: 13 771 iterations, residual 3.6e-5), unlike the rod
+    # packings of the README's open question, which stop at the cap with per cents
+    assert (free.iterations < 200_000).all() and (cycles.residual >= 0).all()
+    at_j = jammed.loc[jammed.phi.idxmin()]
+    assert at_j.iterations < 200_000 and at_j.residual < 1e-3
+    from analysis.summary import analyse_growth
+
+    obs = {k: v for k, v, _ in analyse_growth(out)[0]}
+    assert obs["phi_j"] == pytest.approx(meta["phi_j"])
+    assert obs["residual_j"] == pytest.approx(at_j.residual)
     # every relaxed packing is a frame of the dumps, with its contacts
     steps = {f.step for f, _ in RunData(out).frames()}
     assert set(cycles.step) <= steps
