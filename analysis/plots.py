@@ -534,6 +534,8 @@ def order_scaling(curves, table, out):
             ref = float(max(t.mean_s2.iloc[0], t.mean_s4.iloc[0]))
             ax.loglog(t.n, ref * np.sqrt(n0 / t.n), color="grey", lw=0.8, ls=":",
                       label=r"$\propto 1/\sqrt{N}$")
+            ax.xaxis.set_minor_locator(matplotlib.ticker.NullLocator())
+            ax.set_xticks(list(t.n), [str(int(v)) for v in t.n])
         ax.set_xlabel("particles N")
         if j == 0:
             ax.set_ylabel("order parameter, mean over the seeds")
