@@ -13,8 +13,13 @@ def _run(root, variant, seed, n, alpha, status="ok", rng=None):
     d = root / "study" / variant / f"seed{seed}" / "pysim"
     d.mkdir(parents=True)
     (d / "run.json").write_text(json.dumps({"status": status}))
-    (d.parent / "case.yaml").write_text(yaml.safe_dump(
-        {"particles": {"n": n, "aspect_ratio": alpha}, "seed": seed}))
+    (d.parent / "case.yaml").write_text(yaml.safe_dump({
+        "particles": {"n": n, "dimension": 2, "aspect_ratio": alpha,
+                      "diameter": {"distribution": "mono", "mean": 1.0}},
+        "contact": {"law": "harmonic", "k_n": 1.0},
+        "protocol": {"name": "compress", "integrator": "overdamped", "phi_init": 0.4,
+                     "rate": 1e-3, "phi_final": 0.88, "dt": 0.01},
+        "seed": seed}))
     phi = np.linspace(0.4, 0.88, 25)
     s = rng.rayleigh(np.sqrt(0.5), size=(2, len(phi)))  # sqrt(N) S_n of random angles
     pd.DataFrame({"step": np.arange(len(phi)), "phi": phi, "n": n, "sqrt_n_s2": s[0],

@@ -10,11 +10,11 @@ import sys
 from pathlib import Path
 
 import pandas as pd
-import yaml
 
 from analysis.order import finite_size_order
 from analysis.plots import order_scaling
 from pysim.io import atomic_write_text
+from workflows.case import load_case
 
 #: frames below this packing fraction are left out of the table (the dilute start)
 PHI_MIN = 0.7
@@ -29,7 +29,7 @@ def run_curves(runs) -> pd.DataFrame:
         run = Path(run)
         if json.loads((run / "run.json").read_text()).get("status") != "ok":
             continue  # failed runs are listed in failures.csv
-        case = yaml.safe_load((run.parent / "case.yaml").read_text())
+        case = load_case(run.parent / "case.yaml")
         cv = pd.read_csv(run / "curves.csv")
         cv["alpha"] = float(case["particles"]["aspect_ratio"])
         cv["seed"] = int(case["seed"])
