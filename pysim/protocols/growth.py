@@ -28,6 +28,7 @@ from tqdm import tqdm
 
 from pysim import checkpoint
 from pysim.protocols.compress import max_overlap, model_from_case, state_from_init
+from pysim.protocols.jammed import residuals
 from pysim.protocols.output import RunFiles
 from pysim.simulation import BlowUpError, Simulation
 
@@ -46,14 +47,12 @@ def _relax(sim: Simulation, p: dict, k_n: float, d_mean: float) -> tuple[float, 
     nothing touches). A jammed packing whose FIRE run stopped at ``max_relax`` with a
     residual of several per cent is no force-balanced minimum (README, growth's
     "jammed"); the residual makes that visible in ``cycles.dat`` and the analysis."""
-    it, fmax, _ = sim.minimize(f_tol=p["force_tol"] * k_n * d_mean, max_iter=p["max_relax"])
+    it, _, _ = sim.minimize(f_tol=p["force_tol"] * k_n * d_mean, max_iter=p["max_relax"])
     sim.state.step += it  # FIRE iterations count as steps, so steps stay unique
     th = sim.thermo()
     e = th.pe / sim.state.n / (k_n * d_mean**2)
-    _, rec = sim.contact_table()
-    fc = np.linalg.norm(rec[:, 7:10], axis=1) if len(rec) else np.zeros(0)
-    residual = float(fmax / fc.mean()) if len(fc) and fc.mean() > 0 else 0.0
-    return e, e >= p["energy_tol"], int(it), residual
+    residual = residuals(sim)["force_residual_max"]  # NaN when nothing touches
+    return e, e >= p["energy_tol"], int(it), residual if np.isfinite(residual) else 0.0
 
 
 def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = False,
