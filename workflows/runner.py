@@ -111,3 +111,11 @@ def run(engine: str, case_path, data, out, ranks: int = 1, threads: int = 1,
 def clear_failed(out) -> None:
     """Remove what a failed attempt left (before a retry)."""
     shutil.rmtree(Path(out) / "failed", ignore_errors=True)
+
+
+def ok_runs(run_dirs) -> list[Path]:
+    """The run directories among ``run_dirs`` whose ``run.json`` has ``status: ok``, in
+    their order, as paths: what the figures draw (failed runs are listed in
+    ``failures.csv`` instead)."""
+    return [Path(d) for d in run_dirs
+            if json.loads((Path(d) / "run.json").read_text()).get("status") == "ok"]

@@ -161,3 +161,14 @@ def test_checkpoint_of_another_case_is_not_resumed(tmp_path):
     assert not (out / "checkpoint.npz").exists()
     stamp = json.loads((out / "resume.json").read_text())
     assert stamp == engines.resume_stamp("pysim", case, tmp_path / "init.data")
+
+
+def test_figures_draw_only_the_runs_that_succeeded(tmp_path):
+    from workflows.runner import ok_runs
+    dirs = []
+    for name, status in (("a", "ok"), ("b", "failed"), ("c", "ok")):
+        d = tmp_path / name
+        d.mkdir()
+        (d / "run.json").write_text(f'{{"status": "{status}"}}')
+        dirs.append(str(d))
+    assert ok_runs(dirs) == [tmp_path / "a", tmp_path / "c"]

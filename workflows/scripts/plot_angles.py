@@ -4,7 +4,6 @@ the first frame at or above the fitted jamming point (compression)."""
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -15,6 +14,7 @@ from analysis.contacts import contact_angles
 from analysis.io import RunData
 from analysis.plots import contact_angle_distributions
 from workflows.case import load_case
+from workflows.runner import ok_runs
 
 
 def jamming_frame(run_dir: Path, protocol: str):
@@ -42,10 +42,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, required=True)
     a = ap.parse_args(argv)
     groups = {}
-    for run in a.runs:
-        record = json.loads((run / "run.json").read_text())
-        if record.get("status") != "ok":
-            continue
+    for run in ok_runs(a.runs):
         case = load_case(run.parent / "case.yaml")
         alpha = case["particles"].get("aspect_ratio", 0.0)
         if alpha <= 0:

@@ -5,7 +5,6 @@ lengths, for every successful run (final frames)."""
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -16,6 +15,7 @@ from analysis import plots
 from analysis.io import RunData
 from analysis.order import OrientationCorrelation, angle_to_horizontal
 from analysis.stress import StressField
+from workflows.runner import ok_runs
 
 #: ``Q(r)`` out to this many particle lengths ``L + D``; stress elements of this many
 ORDER_RANGE = 3.0
@@ -29,9 +29,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     variants = sorted({d.parent.parent.name for d in a.run_dirs})
     runs = []
-    for d in a.run_dirs:
-        if json.loads((d / "run.json").read_text()).get("status") != "ok":
-            continue
+    for d in ok_runs(a.run_dirs):
         last, contacts = RunData(d).frames()[-1]
         variant, seed, engine = d.parent.parent.name, d.parent.name, d.name
         length = float(np.mean(last.length + 2.0 * last.radius))  # particle length L + D

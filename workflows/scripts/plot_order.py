@@ -5,7 +5,6 @@ frames (table, :func:`analysis.order.finite_size_order`)."""
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -15,6 +14,7 @@ from analysis.order import finite_size_order
 from analysis.plots import order_scaling
 from pysim.io import atomic_write_text
 from workflows.case import load_case
+from workflows.runner import ok_runs
 
 #: frames below this packing fraction are left out of the table (the dilute start)
 PHI_MIN = 0.7
@@ -25,10 +25,7 @@ def run_curves(runs) -> pd.DataFrame:
     (``<study>/<variant>/seed<k>/<engine>`` directories) with ``alpha`` (the case's
     aspect ratio), ``seed`` and ``engine`` columns added."""
     parts = []
-    for run in runs:
-        run = Path(run)
-        if json.loads((run / "run.json").read_text()).get("status") != "ok":
-            continue  # failed runs are listed in failures.csv
+    for run in ok_runs(runs):
         case = load_case(run.parent / "case.yaml")
         cv = pd.read_csv(run / "curves.csv")
         cv["alpha"] = float(case["particles"]["aspect_ratio"])

@@ -3,7 +3,6 @@ variant: how the pressure curve changes with the study's varying parameter."""
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -11,6 +10,7 @@ import pandas as pd
 
 from analysis.plots import pressure_by_variant
 from workflows.scripts.plot_study import pressure_curve
+from workflows.runner import ok_runs
 
 
 def main(argv=None) -> int:
@@ -22,9 +22,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, required=True)
     a = ap.parse_args(argv)
     runs = []
-    for run in a.runs:
-        if json.loads((run / "run.json").read_text()).get("status") != "ok":
-            continue
+    for run in ok_runs(a.runs):
         obs = pd.read_csv(run / "observables.csv")
         val = dict(zip(obs.observable, obs.value))
         value = obs[a.parameter].iloc[0] if a.parameter in obs.columns else run.parent.parent.name

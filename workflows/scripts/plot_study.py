@@ -6,7 +6,6 @@ its bulk window."""
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -18,6 +17,7 @@ from analysis.compare import per_engine
 from analysis.contacts import ContactNumber
 from analysis.io import RunData, read_thermo
 from analysis.packing import packing_fraction
+from workflows.runner import ok_runs
 
 
 def contacts_at_jamming(run_dir: Path, phi_j: float, bulk=None):
@@ -73,9 +73,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     runs, obs = [], []
     seeds = {}
-    for d in a.run_dirs:
-        if json.loads((d / "run.json").read_text()).get("status") != "ok":
-            continue  # failed runs are listed in failures.csv, not drawn
+    for d in ok_runs(a.run_dirs):
         o = pd.read_csv(d / "observables.csv")
         obs.append(o)
         val = dict(zip(o.observable, o.value))

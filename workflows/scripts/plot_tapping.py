@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -13,18 +12,13 @@ import pandas as pd
 from analysis import plots, theory
 from analysis.io import read_particle_frames
 from workflows.case import ConfigError, load_case
-
-
-def _ok_runs(run_dirs):
-    for d in run_dirs:
-        if json.loads((d / "run.json").read_text()).get("status") == "ok":
-            yield d
+from workflows.runner import ok_runs
 
 
 def curves_figure(run_dirs, out: Path) -> int:
     runs, limits = [], {}
     variants = sorted({d.parent.parent.name for d in run_dirs})
-    for d in _ok_runs(run_dirs):
+    for d in ok_runs(run_dirs):
         case = load_case(d.parent / "case.yaml")
         alpha = case["particles"]["aspect_ratio"]
         limits[rf"$\phi_{{max}}(\alpha={alpha:g})$"] = float(theory.phi_max_aligned(alpha))
@@ -34,7 +28,7 @@ def curves_figure(run_dirs, out: Path) -> int:
     if not runs:
         plots.message_figure(out, "no successful tapping run to draw: see failures.csv")
         return 0
-    thickness = load_case(next(iter(_ok_runs(run_dirs))).parent / "case.yaml")["container"]
+    thickness = load_case(next(iter(ok_runs(run_dirs))).parent / "case.yaml")["container"]
     plots.tapping_curves(runs, out, phi_max=limits,
                          layer_label=f"({thickness['diameter'] / 2 * 1e3:g} mm thick)"
                          if thickness["diameter"] < 0.1 else "")
@@ -43,7 +37,7 @@ def curves_figure(run_dirs, out: Path) -> int:
 
 def snapshots_figure(run_dirs, out: Path, taps: list[float]) -> int:
     frames, dc = [], None
-    for d in _ok_runs(run_dirs):
+    for d in ok_runs(run_dirs):
         case = load_case(d.parent / "case.yaml")
         dc = case["container"]["diameter"]
         cv = pd.read_csv(d / "curves.csv")
