@@ -110,16 +110,18 @@ def analyse_growth(run_dir, c_min: int | None = None):
 
     ``phi_j`` is the first jammed packing fraction of the bisection and its uncertainty
     the distance to the last unjammed one; ``z_j`` etc. are those of the jammed relaxed
-    packing at ``phi_j``, and ``residual_j`` its largest force over the mean contact force
-    when FIRE stopped (a jammed decision at the iteration cap leaves per cents; NaN for
-    runs written before the column). Curves: every output frame, with ``relaxed`` and
-    ``jammed`` flags for the frames of the relax/increment cycles.
+    packing at ``phi_j``, ``residual_j`` its largest force over the mean contact force
+    when the relaxation stopped, and ``settled_j`` 1 when that relaxation ended at a
+    minimum, 0 when it ran out of rounds with the energy still falling (a jammed decision
+    without proof; NaN for runs written before the column, 2026-11-24). Curves: every
+    output frame, with ``relaxed`` and ``jammed`` flags for the frames of the
+    relax/increment cycles.
     """
     run = RunData(run_dir)
     thermo = run.thermo
     cycles = pd.read_csv(Path(run_dir) / "cycles.dat", sep=r"\s+", comment="#", header=None,
                          names=["step", "phi", "e", "p", "nc", "jammed", "iterations",
-                                "residual"])  # the last two since 2026-11-24 (else NaN)
+                                "residual", "settled"])  # the last three since 2026-11-24
     curves = frame_curves(run, c_min)
     curves["relaxed"] = curves.step.isin(cycles.step)
     curves["jammed"] = curves.step.isin(cycles.step[cycles.jammed == 1])
@@ -135,11 +137,12 @@ def analyse_growth(run_dir, c_min: int | None = None):
                  ("z_j_with_rattlers", first.z, np.nan),
                  ("rattler_fraction_j", first.n_rattlers / first.n, np.nan),
                  ("phi_at_z_j", first.phi, np.nan), ("s_nematic_j", first.s_nematic, np.nan),
-                 ("residual_j", float(hi.residual), np.nan)]
+                 ("residual_j", float(hi.residual), np.nan),
+                 ("settled_j", float(hi.settled), np.nan)]
     else:
         rows += [(k, np.nan, np.nan) for k in ("phi_j", "z_j", "z_j_bonds", "z_j_with_rattlers",
                                                "rattler_fraction_j", "phi_at_z_j", "s_nematic_j",
-                                               "residual_j")]
+                                               "residual_j", "settled_j")]
     rows += [("relax_cycles", float(len(cycles)), np.nan)]
     return rows, curves, thermo
 

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import json
 import time
+from typing import NamedTuple
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -185,23 +186,42 @@ def is_converged(result: dict, energy_target: float) -> bool:
     return _within_balance_tol(result)
 
 
-def relax(sim: Simulation, f_tol: float, max_relax: int, done=None) -> tuple[bool, bool]:
+class Relaxation(NamedTuple):
+    """Outcome of :func:`relax`."""
+
+    #: every force and torque below ``f_tol``
+    balanced: bool
+    #: the relaxation ended at a minimum (the energy stopped falling, or the forces reached
+    #: ``f_tol``) or ``done`` held, rather than running out of rounds
+    stopped: bool
+    #: FIRE and L-BFGS iterations together
+    iterations: int
+
+
+def relax(sim: Simulation, f_tol: float, max_relax: int, done=None, *,
+          energy_rtol: float = ENERGY_RTOL, balance: bool = True) -> Relaxation:
     """Relax ``sim`` at fixed box to a minimum of its energy. FIRE first, until the
     residuals are below :data:`BALANCE_TOL` (checked every :data:`CHECK_EVERY`
     iterations) or ``max_relax`` iterations; then rounds (at most :data:`RELAX_ROUNDS`) of
     ``max_relax`` / :data:`LBFGS_SHARE` L-BFGS iterations (:func:`pysim.minimize.lbfgs`)
     followed by the same FIRE run, until the energy has stopped falling: for
-    :data:`SETTLE_ROUNDS` rounds in a row it fell by less than :data:`ENERGY_RTOL` of
-    itself and ended balanced to :data:`BALANCE_TOL`. Stops at once when every force and
-    torque is below ``f_tol`` or ``done(sim)`` holds (checked with the FIRE stops and
-    before anything runs). Returns ``(balanced to f_tol, stopped)``: ``stopped`` when the
-    energy stopped falling, the forces reached ``f_tol`` or ``done`` held."""
+    :data:`SETTLE_ROUNDS` rounds in a row it fell by less than ``energy_rtol`` of itself
+    and (with ``balance``) ended balanced to :data:`BALANCE_TOL`. Stops at once when every
+    force and torque is below ``f_tol`` or ``done(sim)`` holds (checked with the FIRE stops
+    and before anything runs). ``balance=False`` is for energies with kinks (3-D rods with
+    the closest-point law: a minimum on the kink of a near-parallel contact keeps torques
+    of the order of the contact torques, which no minimiser removes). Returns a
+    :class:`Relaxation`."""
+    iterations = 0
+
     def stop(t: Simulation) -> bool:
         return (done is not None and done(t)) or balanced_to_tol(t)
 
     def fire() -> bool:
-        _, fmax, tmax = sim.minimize(f_tol=f_tol, max_iter=max_relax, until=stop,
-                                     check_every=CHECK_EVERY)
+        nonlocal iterations
+        it, fmax, tmax = sim.minimize(f_tol=f_tol, max_iter=max_relax, until=stop,
+                                      check_every=CHECK_EVERY)
+        iterations += int(it)
         return fmax < f_tol and tmax < f_tol
 
     def finished() -> bool:
@@ -211,23 +231,25 @@ def relax(sim: Simulation, f_tol: float, max_relax: int, done=None) -> tuple[boo
     balanced = bool(max(np.linalg.norm(sim.f, axis=1).max(initial=0.0),
                         np.linalg.norm(sim.torque, axis=1).max(initial=0.0)) < f_tol)
     if finished():
-        return balanced, True
+        return Relaxation(balanced, True, iterations)
     balanced = fire()
     calm = 0
     for _ in range(RELAX_ROUNDS):
         if finished():
-            return balanced, True
+            return Relaxation(balanced, True, iterations)
         e0 = sim.thermo().pe
         with threadpool_limits(limits=1):  # BLAS threads only slow L-BFGS' vectors
-            _, fmax, tmax = lbfgs(sim, f_tol, max(1, max_relax // LBFGS_SHARE))
+            it, fmax, tmax = lbfgs(sim, f_tol, max(1, max_relax // LBFGS_SHARE))
+        iterations += int(it)
         balanced = fmax < f_tol and tmax < f_tol
         if not finished():
             balanced = fire()
         fell = e0 - sim.thermo().pe
-        calm = calm + 1 if fell <= ENERGY_RTOL * e0 and balanced_to_tol(sim) else 0
+        calm = (calm + 1 if fell <= energy_rtol * e0 and (not balance or balanced_to_tol(sim))
+                else 0)
         if calm >= SETTLE_ROUNDS:
-            return balanced, True
-    return balanced, finished()
+            return Relaxation(balanced, True, iterations)
+    return Relaxation(balanced, finished(), iterations)
 
 
 def next_trial(drv: dict, e: float, target: float, max_bisections: int) -> float | None:
@@ -308,7 +330,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
         def unjammed(t: Simulation) -> bool:
             return energy_density(t, d_min) < target / 4
 
-        balanced, stopped = relax(trial, f_tol, p["max_relax"], unjammed)
+        balanced, stopped, _ = relax(trial, f_tol, p["max_relax"], unjammed)
         return energy_density(trial, d_min), balanced, stopped
 
     def record(sim_):

@@ -36,7 +36,7 @@ def test_growth_to_jamming_of_spheres(tmp_path):
     meta = json.loads((out / "run.json").read_text())
     cycles = pd.read_csv(out / "cycles.dat", sep=r"\s+", comment="#", header=None,
                          names=["step", "phi", "e", "p", "nc", "jammed", "iterations",
-                                "residual"])
+                                "residual", "settled"])
     assert 0.60 < meta["phi_j"] < 0.67
     assert meta["phi_j"] - meta["phi_j_low"] < 5e-4
     jammed = cycles[cycles.jammed == 1]
@@ -44,18 +44,18 @@ def test_growth_to_jamming_of_spheres(tmp_path):
     assert jammed.phi.min() == pytest.approx(meta["phi_j"])
     assert free.phi.max() == pytest.approx(meta["phi_j_low"])
     assert (jammed.e > 1e-12).all() and (free.e < 1e-12).all()
-    # FIRE iterations and residuals (largest force over the mean contact force):
-    # unjammed packings relax well inside the cap; the jammed sphere packing at phi_J is
-    # force-balanced (measured: 13 771 iterations, residual 3.6e-5), unlike the rod
-    # packings of the README's open question, which stop at the cap with per cents
-    assert (free.iterations < 200_000).all() and (cycles.residual >= 0).all()
+    # every relaxation settled (at a minimum, or unjammed) inside its rounds; the jammed
+    # sphere packing at phi_J is force-balanced (residual: largest force over the mean
+    # contact force)
+    assert (cycles.settled == 1).all() and (cycles.residual >= 0).all()
+    assert (cycles.iterations > 0).all()
     at_j = jammed.loc[jammed.phi.idxmin()]
-    assert at_j.iterations < 200_000 and at_j.residual < 1e-3
+    assert at_j.residual < 1e-3
     from analysis.summary import analyse_growth
 
     obs = {k: v for k, v, _ in analyse_growth(out)[0]}
     assert obs["phi_j"] == pytest.approx(meta["phi_j"])
-    assert obs["residual_j"] == pytest.approx(at_j.residual)
+    assert obs["residual_j"] == pytest.approx(at_j.residual) and obs["settled_j"] == 1
     # every relaxed packing is a frame of the dumps, with its contacts
     steps = {f.step for f, _ in RunData(out).frames()}
     assert set(cycles.step) <= steps
@@ -79,7 +79,8 @@ def test_growth_stops_at_phi_max(tmp_path):
     assert r.returncode == 3
     assert "passes protocol.phi_max = 0.52" in r.stderr and "raise phi_max" in r.stderr
     cycles = pd.read_csv(tmp_path / "out" / "cycles.dat.part", sep=r"\s+", comment="#",
-                         header=None, names=["step", "phi", "e", "p", "nc", "jammed"])
+                         header=None, names=["step", "phi", "e", "p", "nc", "jammed",
+                                             "iterations", "residual", "settled"])
     assert (cycles.jammed == 0).all() and cycles.phi.max() <= 0.52 + 1e-9
 
 
