@@ -24,19 +24,29 @@ def run_case(tmp_path, case, *extra):
     return tmp_path / "out"
 
 
+def growth_case(n, seed, alpha=0.0, **protocol):
+    """A growth case of frictionless hooke particles (the random-packing study's law)."""
+    return {"particles": {"n": n, "aspect_ratio": alpha, "diameter": {"mean": 1.0}},
+            "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 10.0, "gamma_bg": 0.1},
+            "protocol": {"name": "growth", "phi_init": 0.3, "rate": 0.1, "dt": 1e-4,
+                         **protocol},
+            "output": {"thermo_every": 1000, "dump_every": 5000}, "seed": seed}
+
+
+def read_cycles(path):
+    """A growth run's ``cycles.dat`` (or ``.part``) as a table."""
+    return pd.read_csv(path, sep=r"\s+", comment="#", header=None,
+                       names=["step", "phi", "e", "p", "nc", "jammed", "iterations",
+                              "residual", "settled"])
+
+
 def test_growth_to_jamming_of_spheres(tmp_path):
-    out = run_case(tmp_path, {
-        "particles": {"n": 150, "diameter": {"mean": 1.0}},
-        "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 10.0, "gamma_bg": 0.1},
-        "protocol": {"name": "growth", "phi_init": 0.3, "rate": 0.1, "phi_grow": 0.58,
-                     "dt": 1e-4, "increment": 0.01, "tolerance": 5e-4},
-        "output": {"thermo_every": 1000, "dump_every": 5000}, "seed": 2})
+    out = run_case(tmp_path, growth_case(150, 2, phi_grow=0.58, increment=0.01,
+                                         tolerance=5e-4))
     import json
 
     meta = json.loads((out / "run.json").read_text())
-    cycles = pd.read_csv(out / "cycles.dat", sep=r"\s+", comment="#", header=None,
-                         names=["step", "phi", "e", "p", "nc", "jammed", "iterations",
-                                "residual", "settled"])
+    cycles = read_cycles(out / "cycles.dat")
     assert 0.60 < meta["phi_j"] < 0.67
     assert meta["phi_j"] - meta["phi_j_low"] < 5e-4
     jammed = cycles[cycles.jammed == 1]
@@ -66,18 +76,12 @@ def test_growth_of_rods_decides_every_relaxation(tmp_path):
     zero energy) inside its rounds, which FIRE alone did not do for rods (README, growth's
     "jammed"); the rods jam denser than spheres (about 0.64) and hypostatic, with fewer
     than the isostatic 10 contacts per rod (measured: 100 rods, phi_J 0.6925, z 9.6, 18 s)."""
-    out = run_case(tmp_path, {
-        "particles": {"n": 100, "aspect_ratio": 1.0, "diameter": {"mean": 1.0}},
-        "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 10.0, "gamma_bg": 0.1},
-        "protocol": {"name": "growth", "phi_init": 0.3, "rate": 0.1, "phi_grow": 0.62,
-                     "dt": 1e-4, "increment": 0.01, "tolerance": 1e-3},
-        "output": {"thermo_every": 1000, "dump_every": 5000}, "seed": 3})
+    out = run_case(tmp_path, growth_case(100, 3, alpha=1.0, phi_grow=0.62, increment=0.01,
+                                         tolerance=1e-3))
     import json
 
     meta = json.loads((out / "run.json").read_text())
-    cycles = pd.read_csv(out / "cycles.dat", sep=r"\s+", comment="#", header=None,
-                         names=["step", "phi", "e", "p", "nc", "jammed", "iterations",
-                                "residual", "settled"])
+    cycles = read_cycles(out / "cycles.dat")
     assert (cycles.settled == 1).all()
     assert (cycles.jammed == 1).any() and (cycles.jammed == 0).any()
     assert 0.66 < meta["phi_j"] < 0.75
@@ -88,12 +92,7 @@ def test_growth_of_rods_decides_every_relaxation(tmp_path):
 def test_growth_stops_at_phi_max(tmp_path):
     """Cycles that would grow the packing past protocol.phi_max without jamming stop with
     an error that names the bound (spheres jam near 0.64, far above 0.52)."""
-    case = validate_case({
-        "particles": {"n": 150, "diameter": {"mean": 1.0}},
-        "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 10.0, "gamma_bg": 0.1},
-        "protocol": {"name": "growth", "phi_init": 0.3, "rate": 0.1, "phi_grow": 0.5,
-                     "phi_max": 0.52, "dt": 1e-4, "increment": 0.01},
-        "output": {"thermo_every": 1000, "dump_every": 5000}, "seed": 2})
+    case = validate_case(growth_case(150, 2, phi_grow=0.5, phi_max=0.52, increment=0.01))
     cp = tmp_path / "case.yaml"
     cp.write_text(yaml.safe_dump(case))
     write_initial(case, tmp_path / "init.data")
@@ -102,9 +101,7 @@ def test_growth_stops_at_phi_max(tmp_path):
                         "--no-progress"], capture_output=True, text=True)
     assert r.returncode == 3
     assert "passes protocol.phi_max = 0.52" in r.stderr and "raise phi_max" in r.stderr
-    cycles = pd.read_csv(tmp_path / "out" / "cycles.dat.part", sep=r"\s+", comment="#",
-                         header=None, names=["step", "phi", "e", "p", "nc", "jammed",
-                                             "iterations", "residual", "settled"])
+    cycles = read_cycles(tmp_path / "out" / "cycles.dat.part")
     assert (cycles.jammed == 0).all() and cycles.phi.max() <= 0.52 + 1e-9
 
 
