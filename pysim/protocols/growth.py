@@ -19,8 +19,8 @@
 
 Every relaxed packing is a frame of ``particles.dump``/``contacts.dump`` and a row of
 ``cycles.dat`` (``step phi pe_per_particle pressure n_contacts jammed iterations residual
-settled``), which is what the analysis of ``<C>(phi)``, ``P(C)`` and the order along the way reads. The driver
-checkpoints after every relaxation and resumes bit-identically.
+settled``), which is what the analysis of ``<C>(phi)``, ``P(C)`` and the order along the
+way reads. The driver checkpoints after every relaxation and resumes bit-identically.
 """
 from __future__ import annotations
 
