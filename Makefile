@@ -11,7 +11,7 @@ CONFIG  ?= workflows/config/quick.yaml
 RESULTS ?= results
 STAMP   := $(VENV)/.stamp-setup
 
-.PHONY: setup liggghts run test doctor lint clean bench
+.PHONY: setup liggghts run stop test doctor lint clean bench
 
 setup: $(STAMP) liggghts
 
@@ -45,6 +45,10 @@ run: setup
 	$(VENV)/bin/snakemake --cores $(CORES) --configfile $(CONFIG) --keep-going --rerun-incomplete
 	$(VENV)/bin/snakemake --cores 1 --configfile $(CONFIG) --report $(RESULTS)/report.html
 	@echo "results: $(RESULTS)/summary.csv $(RESULTS)/comparison.csv $(RESULTS)/report.html"
+
+# pause the pipeline running here (what Ctrl-C does); 'make run' resumes it
+stop:
+	$(PY) -m workflows.scripts.stop
 
 test: setup
 	$(VENV)/bin/pytest -q

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from pysim import io
+from workflows.stopping import check_signalled, stop_process
 
 PROJECT_ROOT = Path(__file__).resolve().parents[1]
 #: where the decks live; RODPACK_INPUTS points elsewhere (tests use it to break a deck)
@@ -692,6 +693,7 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
             raise EngineError(f"{engine} ran past its budget of {timeout:g} s; "
                               f"log: {screen_path}")
     wall = time.perf_counter() - t0
+    check_signalled(engine, proc.returncode)
     text = screen_path.read_text(errors="replace")
     if proc.returncode != 0 or _error_line(text):
         raise EngineError(failure_message(engine, proc.returncode, text, screen_path))
@@ -776,8 +778,8 @@ def prune_restarts(work: Path, keep: int = KEEP_RESTARTS) -> list[Path]:
 def _run_pruning(cmd, screen, work: Path, env: dict, timeout: float):
     """Run ``cmd`` in ``work`` with output to ``screen`` and prune its restart files
     (:func:`prune_restarts`) every :data:`PRUNE_SECONDS` while it runs. Returns the
-    finished process, or None when it ran past ``timeout`` seconds (it is killed, as it is
-    on any exception here)."""
+    finished process, or None when it ran past ``timeout`` seconds (it is stopped, as it is
+    on any exception here, by :func:`workflows.stopping.stop_process`)."""
     proc = subprocess.Popen(cmd, stdout=screen, stderr=subprocess.STDOUT, cwd=work, env=env)
     deadline = time.perf_counter() + timeout
     try:
@@ -789,12 +791,10 @@ def _run_pruning(cmd, screen, work: Path, env: dict, timeout: float):
             except subprocess.TimeoutExpired:
                 prune_restarts(work)
                 if time.perf_counter() >= deadline:
-                    proc.kill()
-                    proc.wait()
+                    stop_process(proc)
                     return None
     except BaseException:
-        proc.kill()
-        proc.wait()
+        stop_process(proc)
         raise
     prune_restarts(work)
     return proc

@@ -12,6 +12,12 @@ the report lists the failed ones.
 pysim runs resume from their last checkpoint when it belongs to the same case and initial
 data (``resume.json``), so a killed pipeline re-run picks up where it stopped; the
 checkpoint of another case (the configuration changed) is removed and the run starts over.
+
+A run that is *stopped* rather than failed — the runner gets SIGINT (Ctrl-C), SIGTERM (a
+``kill``, ``scancel``, a batch system's time limit) or SIGHUP, or the engine process dies of
+one of them — is not a result: the runner stops the engine, writes no ``run.json`` and
+raises :class:`Interrupted`, so Snakemake counts the job as not done and the next run
+resumes it from its last checkpoint or restart file.
 """
 from __future__ import annotations
 
@@ -25,8 +31,11 @@ from pathlib import Path
 
 from workflows import checks, engines, provenance
 from workflows.case import load_case
+from workflows.stopping import Interrupted, check_signalled, stop_process, stop_signals_raise
 
 COMMON = ("particles.dump", "contacts.dump", "thermo.dat")
+#: pysim's own record of a run that finished while the runner was being stopped
+FINISHED = "pysim_finished.json"
 #: keys of a provenance record that the runner writes itself
 PROVENANCE_KEYS = ("engine", "engine_version", "case_hash", "seed", "git_revision", "host",
                    "python", "finished_at", "pid", "status")
@@ -38,7 +47,6 @@ class RunFailure(RuntimeError):
 
 def _pysim(case_path: Path, data: Path, out: Path, threads: int, timeout: float) -> dict:
     import pysim
-    from pysim.io import atomic_write_text
 
     cmd = [sys.executable, "-m", "pysim", "run", str(case_path), "--data", str(data), "--out",
            str(out), "--no-progress"]
@@ -46,6 +54,25 @@ def _pysim(case_path: Path, data: Path, out: Path, threads: int, timeout: float)
     stamp = engines.resume_stamp("pysim", load_case(case_path), data)
     stamp_path = out / "resume.json"
     same = stamp_path.exists() and json.loads(stamp_path.read_text()) == stamp
+    done = out / FINISHED
+    if not (same and done.exists() and all((out / name).exists() for name in COMMON)):
+        done.unlink(missing_ok=True)
+        _run_pysim(cmd, out, stamp, same, threads, timeout)
+        os.replace(out / "run.json", done)  # the runner writes run.json, once checked
+    # else pysim had finished when a stop signal reached the runner: its record stands
+    rec = json.loads(done.read_text())
+    keep = {k: v for k, v in rec.items() if k not in PROVENANCE_KEYS}
+    keep["engine_version"] = pysim.__version__
+    keep["command"] = cmd
+    return keep
+
+
+def _run_pysim(cmd: list, out: Path, stamp: dict, same: bool, threads: int,
+               timeout: float) -> None:
+    """Start (or resume) pysim, which writes its record to ``out/run.json``."""
+    from pysim.io import atomic_write_text
+
+    stamp_path = out / "resume.json"
     if (out / "checkpoint.npz").exists() and same:
         cmd.append("--resume")
     else:
@@ -55,27 +82,42 @@ def _pysim(case_path: Path, data: Path, out: Path, threads: int, timeout: float)
     log = out / "pysim.log"
     env = dict(os.environ, NUMBA_NUM_THREADS=str(threads))
     with open(log, "w") as fh:
+        proc = subprocess.Popen(cmd, stdout=fh, stderr=subprocess.STDOUT, env=env)
         try:
-            proc = subprocess.run(cmd, stdout=fh, stderr=subprocess.STDOUT, timeout=timeout, env=env)
+            proc.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
+            stop_process(proc)
             raise RunFailure(f"pysim ran past its budget of {timeout:g} s; log: {log}") from None
+        except BaseException:
+            stop_process(proc)
+            raise
+    check_signalled("pysim", proc.returncode)
     text = log.read_text(errors="replace")
     if proc.returncode != 0:
         errs = [ln for ln in text.splitlines() if ln.startswith("error:")]
         line = errs[-1][len("error:"):].strip() if errs else (text.strip().splitlines() or ["no output"])[-1]
         raise RunFailure(f"pysim failed (exit {proc.returncode}): {line}; log: {log}")
-    rec = json.loads((out / "run.json").read_text())
-    keep = {k: v for k, v in rec.items() if k not in PROVENANCE_KEYS}
-    keep["engine_version"] = pysim.__version__
-    keep["command"] = cmd
-    return keep
 
 
 def run(engine: str, case_path, data, out, ranks: int = 1, threads: int = 1,
         timeout: float = 3600.0) -> dict:
     """Run ``engine`` on the case file ``case_path`` from ``data`` into ``out``; returns
-    the record written to ``out/run.json`` (``status`` is ``ok`` or ``failed``)."""
-    case_path, data, out = Path(case_path), Path(data), Path(out)
+    the record written to ``out/run.json`` (``status`` is ``ok`` or ``failed``).
+
+    Raises :class:`Interrupted`, writing no record, when a stop signal ends the run."""
+    out = Path(out)
+    with stop_signals_raise():
+        try:
+            return _run(engine, Path(case_path), Path(data), out, ranks, threads, timeout)
+        except Interrupted:
+            # a stopped run has no record (a pysim run that had finished keeps its own
+            # record aside, FINISHED, and the next run checks and records it instead)
+            (out / "run.json").unlink(missing_ok=True)
+            raise
+
+
+def _run(engine: str, case_path: Path, data: Path, out: Path, ranks: int, threads: int,
+         timeout: float) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     case = load_case(case_path)
     t0 = time.perf_counter()
@@ -105,6 +147,7 @@ def run(engine: str, case_path, data, out, ranks: int = 1, threads: int = 1,
         rec = provenance.record(engine, version, case, status="failed", error=str(exc),
                                 wall_seconds=time.perf_counter() - t0)
     provenance.write(out / "run.json", rec)
+    (out / FINISHED).unlink(missing_ok=True)
     return rec
 
 

@@ -1,6 +1,7 @@
 """Failures are results: a broken deck, an unstable case or an interrupted pipeline never
 stops the other runs, never leaves half-written files as results, and shows up in the
 report."""
+import json
 import os
 import shutil
 import signal
@@ -172,3 +173,98 @@ def test_figures_draw_only_the_runs_that_succeeded(tmp_path):
         (d / "run.json").write_text(f'{{"status": "{status}"}}')
         dirs.append(str(d))
     assert ok_runs(dirs) == [tmp_path / "a", tmp_path / "c"]
+
+
+def _pysim_config(results):
+    return {"results": str(results), "studies": {"sphere_jamming": {
+        "engines": ["pysim"], "seeds": [1],
+        "case": {"particles": {"n": 100, "diameter": {"mean": 1.0}},
+                 "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 300.0, "gamma_bg": 1.0},
+                 "protocol": {"name": "compress", "phi_init": 0.3, "phi_fast": 0.55,
+                              "rate_fast": 0.2, "rate": 0.005, "phi_final": 0.66, "dt": 1e-4},
+                 "output": {"thermo_every": 500, "dump_every": 20000}},
+        "variants": {"base": {}}}}}
+
+
+def test_stopped_pipeline_records_nothing_and_resumes(tmp_path):
+    """'make stop' (workflows.scripts.stop) stops a running pipeline the way Ctrl-C does:
+    the engine run under way writes no run.json (a stop is not a failure) and keeps its
+    checkpoint, and the next run resumes it and finishes."""
+    from workflows.scripts.stop import stop
+
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text(yaml.safe_dump(_pysim_config(tmp_path / "res")))
+    proc = subprocess.Popen(snakemake(cfg, cores="1"), stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, start_new_session=True)
+    out = tmp_path / "res" / "sphere_jamming" / "base" / "seed1" / "pysim"
+    deadline = time.time() + 300
+    while time.time() < deadline and not ((out / "checkpoint.npz").exists()
+                                          and (out / "thermo.dat.part").exists()):
+        time.sleep(0.05)
+    assert (out / "checkpoint.npz").exists(), "the pysim run never checkpointed"
+    assert stop(tmp_path, timeout=60) >= 3  # snakemake, the job's shell, runner, pysim
+    proc.wait(timeout=60)
+    assert not (out / "thermo.dat").exists(), "the run finished before it was stopped"
+    assert not (out / "run.json").exists()
+    assert (out / "checkpoint.npz").exists()
+    assert "stopped: the runner got SIGINT" in (out / "log.txt").read_text()
+    again = subprocess.run(snakemake(cfg, "--rerun-incomplete", cores="1"), capture_output=True,
+                           text=True)
+    assert again.returncode == 0, again.stderr[-3000:]
+    rec = json.loads((out / "run.json").read_text())
+    assert rec["status"] == "ok" and "--resume" in rec["command"]
+
+
+def test_engine_killed_by_sigterm_is_stopped_not_failed(tmp_path):
+    """A pysim process ended by SIGTERM (a kill, a batch system) makes the runner exit with
+    128 + 15 and no run.json, so the run is resumed rather than reported as failed."""
+    import psutil
+
+    from workflows.case import validate_case
+    from pysim.initial import write_initial
+
+    case = validate_case({**_pysim_config(tmp_path)["studies"]["sphere_jamming"]["case"],
+                          "seed": 1})
+    (tmp_path / "case.yaml").write_text(yaml.safe_dump(case))
+    write_initial(case, tmp_path / "init.data")
+    out = tmp_path / "run"
+    proc = subprocess.Popen([sys.executable, "-m", "workflows.scripts.run_engine", "--engine",
+                             "pysim", "--case", str(tmp_path / "case.yaml"), "--data",
+                             str(tmp_path / "init.data"), "--out", str(out)],
+                            stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    deadline = time.time() + 300
+    while time.time() < deadline and not (out / "checkpoint.npz").exists():
+        time.sleep(0.05)
+    children = psutil.Process(proc.pid).children()
+    assert len(children) == 1 and "pysim" in " ".join(children[0].cmdline())
+    children[0].terminate()
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + signal.SIGTERM, err
+    assert "stopped: pysim got SIGTERM" in err
+    assert not (out / "run.json").exists() and not (out / "failed").exists()
+
+
+def test_run_finished_before_the_stop_is_recorded_not_rerun(tmp_path):
+    """When the stop reaches the runner after pysim has finished (while it checks the
+    run), pysim's own record is kept aside and the next run records it without running
+    pysim again."""
+    from workflows import engines, runner
+    from workflows.case import validate_case
+    from pysim.initial import write_initial
+    from tests.pysim.test_checkpoint import TINY, pysim_run
+
+    case = validate_case(TINY)
+    (tmp_path / "case.yaml").write_text(yaml.safe_dump(case))
+    write_initial(case, tmp_path / "init.data")
+    out = tmp_path / "run"
+    subprocess.run(pysim_run(tmp_path / "case.yaml", tmp_path / "init.data", out), check=True,
+                   capture_output=True)
+    # what the runner leaves when stopped in that window
+    (out / "resume.json").write_text(json.dumps(
+        engines.resume_stamp("pysim", case, tmp_path / "init.data")))
+    os.replace(out / "run.json", out / runner.FINISHED)
+    rec = runner.run("pysim", tmp_path / "case.yaml", tmp_path / "init.data", out, timeout=600)
+    assert rec["status"] == "ok", rec.get("error")
+    assert not (out / "pysim.log").exists()  # pysim did not run again
+    assert not (out / runner.FINISHED).exists()
+    assert rec["steps"] > 0

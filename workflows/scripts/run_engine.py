@@ -1,4 +1,7 @@
-"""Run one engine on a case; the outcome (ok or failed) goes to OUT/run.json."""
+"""Run one engine on a case; the outcome (ok or failed) goes to OUT/run.json.
+
+A run stopped by SIGINT, SIGTERM or SIGHUP writes no run.json and exits with 128 plus the
+signal number; the next run resumes it from its checkpoint."""
 from __future__ import annotations
 
 import argparse
@@ -7,6 +10,7 @@ from pathlib import Path
 
 from workflows import runner
 from workflows.case import ConfigError
+from workflows.stopping import Interrupted
 
 
 def main(argv=None) -> int:
@@ -25,6 +29,10 @@ def main(argv=None) -> int:
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except Interrupted as exc:
+        print(f"stopped: {exc}; no result is recorded, the next run resumes {a.out} from its "
+              f"last checkpoint", file=sys.stderr)
+        return 128 + exc.signum
     if rec["status"] != "ok":
         print(f"FAILED: {rec['error']}", file=sys.stderr)
     else:

@@ -15,17 +15,25 @@ from pathlib import Path
 import psutil
 
 
-def snakemake_running_in(directory: Path) -> bool:
+def snakemake_processes_in(directory: Path) -> list[psutil.Process]:
+    """The running Snakemake processes whose working directory is ``directory`` (this
+    script and ``stop`` excluded)."""
     me = os.getpid()
+    found = []
     for proc in psutil.process_iter(["pid", "cmdline", "cwd"]):
         try:
             cmd = " ".join(proc.info["cmdline"] or [])
             if proc.info["pid"] != me and "snakemake" in cmd and "unlock_if_idle" not in cmd \
-                    and Path(proc.info["cwd"] or "/").resolve() == directory:
-                return True
+                    and "scripts.stop" not in cmd \
+                    and Path(proc.info["cwd"] or "/").resolve() == Path(directory).resolve():
+                found.append(proc)
         except (psutil.Error, OSError):
             continue
-    return False
+    return found
+
+
+def snakemake_running_in(directory: Path) -> bool:
+    return bool(snakemake_processes_in(directory))
 
 
 def main(argv=None) -> int:
