@@ -89,6 +89,13 @@ BALANCE_TOL = 1e-3
 #: give the budget that 5 rounds of 200 000 gave (5 left two of the quick profile's rod
 #: states with residuals of 0.2-1.4 of the mean contact force, taken as jammed)
 RELAX_ROUNDS = 50
+#: rounds at most for a trial of the jamming protocol (:func:`run`), whose decision
+#: (jammed or not) and final state rest on the relaxation having stopped. 50 were too few
+#: for rods of alpha 1.5 (N = 1024): a trial at phi 0.8902 ran out of its 50 rounds with
+#: U/L^2 = 1.03e-15, inside the target window, and was taken as the stable state (residuals
+#: 1.8 % of the mean contact force); 6 rounds more took it below a quarter of the target,
+#: unjammed
+TRIAL_ROUNDS = 200
 #: a relaxation has reached a minimum when its energy fell by less than this fraction of
 #: itself in :data:`SETTLE_ROUNDS` rounds in a row (each ``max_relax`` / LBFGS_SHARE L-BFGS
 #: iterations and a FIRE run back to :data:`BALANCE_TOL`). Residuals below BALANCE_TOL alone
@@ -199,10 +206,11 @@ class Relaxation(NamedTuple):
 
 
 def relax(sim: Simulation, f_tol: float, max_relax: int, done=None, *,
-          energy_rtol: float = ENERGY_RTOL, balance: bool = True) -> Relaxation:
+          energy_rtol: float = ENERGY_RTOL, balance: bool = True,
+          max_rounds: int = RELAX_ROUNDS) -> Relaxation:
     """Relax ``sim`` at fixed box to a minimum of its energy. FIRE first, until the
     residuals are below :data:`BALANCE_TOL` (checked every :data:`CHECK_EVERY`
-    iterations) or ``max_relax`` iterations; then rounds (at most :data:`RELAX_ROUNDS`) of
+    iterations) or ``max_relax`` iterations; then rounds (at most ``max_rounds``) of
     ``max_relax`` / :data:`LBFGS_SHARE` L-BFGS iterations (:func:`pysim.minimize.lbfgs`)
     followed by the same FIRE run, until the energy has stopped falling: for
     :data:`SETTLE_ROUNDS` rounds in a row it fell by less than ``energy_rtol`` of itself
@@ -234,7 +242,7 @@ def relax(sim: Simulation, f_tol: float, max_relax: int, done=None, *,
         return Relaxation(balanced, True, iterations)
     balanced = fire()
     calm = 0
-    for _ in range(RELAX_ROUNDS):
+    for _ in range(max_rounds):
         if finished():
             return Relaxation(balanced, True, iterations)
         e0 = sim.thermo().pe
@@ -330,7 +338,8 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
         def unjammed(t: Simulation) -> bool:
             return energy_density(t, d_min) < target / 4
 
-        balanced, stopped, _ = relax(trial, f_tol, p["max_relax"], unjammed)
+        balanced, stopped, _ = relax(trial, f_tol, p["max_relax"], unjammed,
+                                     max_rounds=TRIAL_ROUNDS)
         return energy_density(trial, d_min), balanced, stopped
 
     def record(sim_):

@@ -299,6 +299,7 @@ def test_relaxation_rounds_stop_once_the_energy_settles(tmp_path, monkeypatch):
 
     def counting_relax(*args, **kwargs):
         calls.append(0)
+        assert kwargs["max_rounds"] == jammed.TRIAL_ROUNDS  # trials get the long budget
         return real_relax(*args, **kwargs)
 
     monkeypatch.setattr(jammed, "lbfgs", counting_lbfgs)
