@@ -187,26 +187,34 @@ def _pysim_config(results):
 
 
 def test_stopped_pipeline_records_nothing_and_resumes(tmp_path):
-    """'make stop' (workflows.scripts.stop) stops a running pipeline the way Ctrl-C does:
-    the engine run under way writes no run.json (a stop is not a failure) and keeps its
-    checkpoint, and the next run resumes it and finishes."""
+    """'make stop' (workflows.scripts.stop) stops a running pipeline, --keep-going and all:
+    Snakemake starts no further run, the run under way writes no run.json (a stop is not
+    a failure) and keeps its checkpoint, and the next run resumes it and finishes."""
     from workflows.scripts.stop import stop
 
     cfg = tmp_path / "cfg.yaml"
-    cfg.write_text(yaml.safe_dump(_pysim_config(tmp_path / "res")))
-    proc = subprocess.Popen(snakemake(cfg, cores="1"), stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL, start_new_session=True)
-    out = tmp_path / "res" / "sphere_jamming" / "base" / "seed1" / "pysim"
+    conf = _pysim_config(tmp_path / "res")
+    conf["studies"]["sphere_jamming"]["seeds"] = [1, 2]
+    cfg.write_text(yaml.safe_dump(conf))
+    proc = subprocess.Popen(snakemake(cfg, "--keep-going", cores="1"),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    runs = [tmp_path / "res" / "sphere_jamming" / "base" / f"seed{k}" / "pysim" for k in (1, 2)]
+
+    def started():
+        return [d for d in runs if (d / "checkpoint.npz").exists()
+                and (d / "thermo.dat.part").exists()]
+
     deadline = time.time() + 300
-    while time.time() < deadline and not ((out / "checkpoint.npz").exists()
-                                          and (out / "thermo.dat.part").exists()):
+    while time.time() < deadline and not started():
         time.sleep(0.05)
-    assert (out / "checkpoint.npz").exists(), "the pysim run never checkpointed"
+    assert started(), "no pysim run checkpointed"
+    (out,) = started()
     assert stop(tmp_path, timeout=60) >= 3  # snakemake, the job's shell, runner, pysim
     proc.wait(timeout=60)
+    assert started() == [out], "Snakemake started another run after the stop"
     assert not (out / "thermo.dat").exists(), "the run finished before it was stopped"
-    assert not (out / "run.json").exists()
-    assert (out / "checkpoint.npz").exists()
+    assert not any((d / "run.json").exists() for d in runs)
     assert "stopped: the runner got SIGINT" in (out / "log.txt").read_text()
     again = subprocess.run(snakemake(cfg, "--rerun-incomplete", cores="1"), capture_output=True,
                            text=True)

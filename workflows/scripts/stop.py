@@ -1,15 +1,17 @@
 """Stop the pipeline running in this directory so that the next ``make run`` resumes it.
 
-``make stop`` does what Ctrl-C does in the terminal that started ``make run``: it sends
-SIGINT to every Snakemake working in the directory and to all the processes it started.
-Snakemake schedules no further job; each engine run stops, writes no ``run.json`` and keeps
-its last checkpoint or restart file (:mod:`workflows.stopping`), so the next ``make run``
-resumes every stopped run where its checkpoint left it (pysim checkpoints every 300 s of
-wall time, growth and jamming runs after every relaxation) and reruns nothing that
-finished. Waits until they have all ended.
+``make stop`` sends SIGTERM to every Snakemake working in the directory, which then
+schedules no further job and exits once the running ones have ended, and SIGINT to all the
+processes those started. Each engine run stops, writes no ``run.json`` and keeps its last
+checkpoint or restart file (:mod:`workflows.stopping`), so the next ``make run`` resumes
+every stopped run where its checkpoint left it (pysim checkpoints every 300 s of wall
+time, growth and jamming runs after every relaxation) and reruns nothing that finished.
+Waits until they have all ended.
 
-Do not stop a pipeline with ``kill`` on Snakemake alone: a SIGTERM makes Snakemake wait for
-every running job to finish, which for a paper profile takes hours.
+Neither signal alone stops a pipeline: with ``--keep-going`` a SIGINT to Snakemake
+(measured with Snakemake 9.27) leaves it scheduling new jobs as the stopped ones fail, and
+a SIGTERM to Snakemake alone makes it wait for every running job to finish, which for a
+paper profile takes hours.
 """
 from __future__ import annotations
 
@@ -25,25 +27,29 @@ from workflows.scripts.unlock_if_idle import snakemake_processes_in
 
 
 def stop(directory: Path, timeout: float = 120.0) -> int:
-    """SIGINT to the Snakemakes working in ``directory`` and their descendants; wait up to
-    ``timeout`` seconds for all to end. Returns how many processes were signalled."""
-    top = snakemake_processes_in(directory)
-    procs = {p.pid: p for p in top}
-    for p in top:
+    """SIGTERM to the Snakemakes working in ``directory``, SIGINT to their descendants;
+    wait up to ``timeout`` seconds for all to end. Returns how many processes were
+    signalled."""
+    top = {p.pid: p for p in snakemake_processes_in(directory)}
+    jobs = {}
+    for p in top.values():
         try:
-            procs.update({c.pid: c for c in p.children(recursive=True)})
+            jobs.update({c.pid: c for c in p.children(recursive=True) if c.pid not in top})
         except psutil.Error:
             continue
-    procs = list(procs.values())
-    for p in procs:  # Snakemake first: it must schedule nothing new
-        try:
-            p.send_signal(signal.SIGINT)
-        except psutil.Error:
-            continue
+    # Snakemake first, so that it schedules nothing new once the running jobs stop
+    for procs, sig in ((top, signal.SIGTERM), (jobs, signal.SIGINT)):
+        for p in procs.values():
+            try:
+                p.send_signal(sig)
+            except psutil.Error:
+                continue
+    procs = [*top.values(), *jobs.values()]
     gone, alive = psutil.wait_procs(procs, timeout=timeout)
     if alive:
         names = ", ".join(f"{p.pid}" for p in alive)
-        raise RuntimeError(f"processes {names} are still running {timeout:g} s after SIGINT; "
+        raise RuntimeError(f"processes {names} are still running {timeout:g} s after the stop "
+                           "signals; "
                            "look at them with ps, and end them with kill -9 (their runs then "
                            "resume from the last checkpoint)")
     return len(procs)
