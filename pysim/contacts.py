@@ -398,7 +398,7 @@ def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, 
                    friction, scatter, fj, S, kk, ko):
     """Copy the listed pairs ``k0:k1`` within reach (``|d| < R_i + R_j + d_c``) into the
     scratch ``S``, one column each in pair order, ``kk`` their pair indices; zero the
-    spring of every pair out of reach, and with ``scatter`` off every pair's reaction
+    spring of every pair out of reach and, with ``scatter`` off, its reaction
     (:func:`_sphere_scatter` writes those of the pairs in reach). Two loops: the first
     takes the gap of every pair without branches on the pair (each is copied to the next
     free column, which only a pair in reach keeps; ``ko`` collects the others), the
@@ -440,9 +440,6 @@ def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, 
         S[_DIST2 * CAP + m] = dist2
         S[_RI * CAP + m] = ri
         S[_RJ * CAP + m] = rj
-        if not scatter:
-            for c in range(FJ_COLUMNS):
-                fj[k, c] = 0.0
         inside = dist2 < reach * reach
         m += inside
         mo += not inside
@@ -458,9 +455,12 @@ def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, 
                 S[(_WI + c) * CAP + q] = omega[i, c]
                 S[(_WJ + c) * CAP + q] = omega[j, c]
                 S[(_H + c) * CAP + q] = hist[k, c]
-    if friction:
-        for q in range(mo):  # out of reach: the spring restarts
-            k = ko[q]
+    for q in range(mo):  # out of reach: no reaction, and the spring restarts
+        k = ko[q]
+        if not scatter:
+            for c in range(FJ_COLUMNS):
+                fj[k, c] = 0.0
+        if friction:
             for c in range(3):
                 hist[k, c] = 0.0
     return m
