@@ -237,8 +237,12 @@ def _throughput(n, steps, sec):
 
 def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, repeats=3,
         cores=(1, 2), engines=("pysim", "lammps-legacy", "lammps-granular", "liggghts"),
-        scaling=(1_000, 10_000, 100_000, 1_000_000), scaling_steps=20, log=print):
-    """The whole benchmark; returns the rows written to ``out``."""
+        scaling=(1_000, 10_000, 100_000, 1_000_000), scaling_steps=20, scaling_work=2e7,
+        log=print):
+    """The whole benchmark; returns the rows written to ``out``. Each scaling point runs
+    ``scaling_work`` particle-steps (at least ``scaling_steps`` steps), so that the small
+    systems are timed over as long as the large ones (20 steps of 10^4 spheres take 20 ms,
+    and repeated runs of them scattered by 30 %)."""
     out = Path(out).resolve()  # the peers run in the work folder: paths must be absolute
     work = out.parent / "bench"
     st = prepare(work, n_spheres, n_rods, log)
@@ -292,9 +296,10 @@ def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, rep
                 path = work / f"scaling_{kind}_{len(arrays[0])}.npz"
                 if not path.exists():
                     np.savez(path, box=box, **dict(zip(names, arrays)))
-                r = run_pysim(path, max(cores), scaling_steps, True)
                 n = len(arrays[0])
-                add(f"scaling_{kind}", "pysim", max(cores), n, scaling_steps, r["seconds"],
+                nsteps = max(scaling_steps, int(round(scaling_work / n)))
+                r = run_pysim(path, max(cores), nsteps, True)
+                add(f"scaling_{kind}", "pysim", max(cores), n, nsteps, r["seconds"],
                     bytes_per_particle=round((r["peak_rss"] - r["base_rss"]) / n),
                     peak_mib=round(r["peak_rss"] / 2**20))
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -330,7 +335,7 @@ def plot(rows, path: Path):
     fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.5))
     sel = [r for r in rows if not r["case"].startswith("scaling")]
     groups = sorted({(r["case"], r["cores"]) for r in sel})
-    engines = sorted({r["engine"] for r in sel})
+    engines = sorted({r["engine"] for r in sel}) or ["none"]  # --repeats 0: scaling only
     for k, e in enumerate(engines):
         med = [np.median([r["throughput"] for r in sel if (r["case"], r["cores"]) == g
                           and r["engine"] == e] or [np.nan]) / 1e6 for g in groups]
@@ -365,12 +370,16 @@ def main(argv=None) -> int:
     ap.add_argument("--n-rods", type=int, default=2000)
     ap.add_argument("--engines", default="pysim,lammps-legacy,lammps-granular,liggghts")
     ap.add_argument("--scaling", default="1000,10000,100000,1000000")
-    ap.add_argument("--scaling-steps", type=int, default=20)
+    ap.add_argument("--scaling-steps", type=int, default=20,
+                    help="fewest steps per scaling point")
+    ap.add_argument("--scaling-work", type=float, default=2e7,
+                    help="particle-steps per scaling point (steps = work / N)")
     ap.add_argument("--cores", default="1,2")
     a = ap.parse_args(argv)
     rows = run(a.out, a.n_spheres, a.n_rods, a.steps, a.rod_steps, a.repeats,
                tuple(int(c) for c in a.cores.split(",")), tuple(a.engines.split(",")),
-               tuple(int(s) for s in a.scaling.split(",") if s), a.scaling_steps)
+               tuple(int(s) for s in a.scaling.split(",") if s), a.scaling_steps,
+               a.scaling_work)
     plot(rows, a.out.with_suffix(".png"))
     print("\npysim / peer throughput (median, min-max over repeats):")
     for case, c, peer, med, lo, hi in ratios(rows):
