@@ -5,6 +5,7 @@ signal number; the next run resumes it from its checkpoint."""
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -36,9 +37,10 @@ def main(argv=None) -> int:
     if rec["status"] != "ok":
         print(f"FAILED: {rec['error']}", file=sys.stderr)
     else:
-        rate = rec.get("particle_steps_per_second", float("nan"))
-        print(f"{a.engine}: {rec.get('steps')} steps in {rec.get('wall_seconds', 0):.1f} s "
-              f"({rate / 1e6:.2f} M particle-steps/s)", file=sys.stderr)
+        rate = rec.get("particle_steps_per_second")  # growth and relaxation runs have none
+        speed = f" ({rate / 1e6:.2f} M particle-steps/s)" if rate and math.isfinite(rate) else ""
+        print(f"{a.engine}: {rec.get('steps')} steps in {rec.get('wall_seconds', 0):.1f} s"
+              f"{speed}", file=sys.stderr)
     return 0
 
 
