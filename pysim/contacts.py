@@ -455,14 +455,15 @@ def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, 
                 S[(_WI + c) * CAP + q] = omega[i, c]
                 S[(_WJ + c) * CAP + q] = omega[j, c]
                 S[(_H + c) * CAP + q] = hist[k, c]
-    for q in range(mo):  # out of reach: no reaction, and the spring restarts
-        k = ko[q]
-        if not scatter:
-            for c in range(FJ_COLUMNS):
-                fj[k, c] = 0.0
-        if friction:
-            for c in range(3):
-                hist[k, c] = 0.0
+    if friction or not scatter:
+        for q in range(mo):  # out of reach: no reaction, and the spring restarts
+            k = ko[q]
+            if not scatter:
+                for c in range(FJ_COLUMNS):
+                    fj[k, c] = 0.0
+            if friction:
+                for c in range(3):
+                    hist[k, c] = 0.0
     return m
 
 
