@@ -24,6 +24,9 @@ rule analyse_run:
         parameters=_parameters,
     wildcard_constraints:
         engine="pysim|lammps|lammps-body|liggghts",
+    # a finished run is analysed before the next engine run starts: a long profile shows
+    # its results as they come (and a run's analysis error surfaces hours earlier)
+    priority: 10
     shell:
         "{PYTHON} -m workflows.scripts.analyse_run --case {input.case} --run {params.run}"
         " --study {wildcards.study} --variant {wildcards.variant} --seed {wildcards.seed}"
