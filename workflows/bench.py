@@ -231,6 +231,27 @@ def prepare(work: Path, n_spheres: int, n_rods: int, log=print) -> dict:
     return {"spheres": sph, "rods": rods}
 
 
+def busy_cores(seconds: float = 1.0) -> float:
+    """Cores kept busy by the whole machine over ``seconds`` (from ``/proc/stat``: the
+    non-idle share of all CPU time, times the number of CPUs); called while this process
+    sleeps, it is what other processes use."""
+    def sample():
+        with open("/proc/stat") as fh:
+            vals = [int(v) for v in fh.readline().split()[1:]]
+        idle = vals[3] + (vals[4] if len(vals) > 4 else 0)  # idle + iowait
+        return sum(vals), idle
+
+    t0, i0 = sample()
+    time.sleep(seconds)
+    t1, i1 = sample()
+    total = t1 - t0
+    return (1.0 - (i1 - i0) / total) * (os.cpu_count() or 1) if total > 0 else 0.0
+
+
+#: other processes using more than this many cores make the timings unreliable
+BUSY_WARN = 0.1
+
+
 def _throughput(n, steps, sec):
     return n * steps / sec if sec > 0 else float("nan")
 
@@ -245,6 +266,11 @@ def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, rep
     and repeated runs of them scattered by 30 %)."""
     out = Path(out).resolve()  # the peers run in the work folder: paths must be absolute
     work = out.parent / "bench"
+    busy = busy_cores()
+    if busy > BUSY_WARN:
+        log(f"warning: other processes keep {busy:.2f} cores busy; the timings and the "
+            "ratios are unreliable unless the benchmark runs alone (pause a pipeline with "
+            "'make stop')")
     st = prepare(work, n_spheres, n_rods, log)
     engines = [e for e in engines if e != "liggghts" or shutil.which("liggghts")]
     m = MODEL

@@ -40,3 +40,19 @@ def test_glued_rods_have_nine_spheres_at_half_diameter_spacing(tmp_path):
     assert vol == np.pi * 4 / 4 + np.pi / 6
     text = (tmp_path / "g.data").read_text()
     assert "9 atoms" in text and "Molecules" in text
+
+
+def test_busy_cores_measures_another_busy_process():
+    """The warning's measure: a spinning child process keeps about one core busy."""
+    import subprocess
+    import sys
+
+    idle = bench.busy_cores(0.5)
+    assert 0.0 <= idle <= (__import__("os").cpu_count() or 1)
+    spin = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    try:
+        busy = bench.busy_cores(1.0)
+    finally:
+        spin.kill()
+        spin.wait()
+    assert busy >= 0.7
