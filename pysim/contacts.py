@@ -23,7 +23,9 @@ loops call them:
   (:func:`pysim.neighbors.motion_bound`; they would add nothing).
   :func:`sphere_pass` replaces ``pair_pass`` when every particle is a sphere: the same
   sums in the same order, with the contact laws of a chunk of pairs evaluated together
-  on SIMD lanes (gather, laws, scatter).
+  on SIMD lanes (gather, laws, scatter). :func:`rod_pass` replaces it for rods with one
+  bond per pair: the closest points and the laws of a chunk on SIMD lanes, the same
+  bits (``end_bonds`` rods keep ``pair_pass``).
 * :func:`pair_forces`, a plain serial loop in pair order that can also record the
   contact table (used with each dump, and by the tests).
 
@@ -47,7 +49,7 @@ import numpy as np
 
 from pysim.forces import (D_COH, END_BONDS, F_COH, GAMMA_N, GAMMA_T, HERTZ, HOOKE, K_N, K_T,
                           MU, cohesion_force, elastic_energy, normal_force, tangential_force)
-from pysim.geometry import closest_params
+from pysim.geometry import closest_params, closest_select
 from pysim.jit import njit, pnjit, prange
 
 #: columns of a recorded contact: point (3), normal (3), overlap, force on i (3)
@@ -713,6 +715,354 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, hist, law, p
                 i, s0, s1, s2, q0, q1, q2 = _sphere_scatter(
                     k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, fj, stats,
                     blk, b, S, kk, mc, scatter, s0, s1, s2, q0, q1, q2)
+                k0 = k1
+                if k0 >= k_end:
+                    break
+    if stats:
+        return block_totals(blk, virial)
+    return 0.0, 0
+
+
+# -- rods on SIMD lanes -------------------------------------------------------------------------
+#: listed pairs per chunk of :func:`rod_pass` (two scratches of :data:`_NA` and :data:`_NR`
+#: rows of ``RCAP`` values: 26 KiB, within L1)
+RCAP = 64
+# scratch A, one column per listed pair that the motion bound does not rule out: gap of the
+# centres, both axes, half-lengths and radii; then the closest points (a = p_i - x_i, the
+# gap g = p_j - p_i, |g|^2)
+_AD, _AUI, _AUJ, _AHI, _AHJ, _ARI, _ARJ, _AA, _AG, _ADIST2 = 0, 3, 6, 9, 10, 11, 12, 13, 16, 19
+_NA = 20
+# scratch R, one column per pair in reach: the geometry, velocities, spins, spring; then
+# the force on i, torques on i and j, overlap and elastic energy
+_RD, _RA, _RG, _RDIST2, _RRI, _RRJ, _RVI, _RVJ, _RWI, _RWJ, _RH = (0, 3, 6, 9, 10, 11, 12, 15,
+                                                                  18, 21, 24)
+_RF, _RT, _RU, _RDELTA, _RPE = 27, 30, 33, 36, 37
+_NR = 38
+
+
+@njit
+def _rod_gather(k0, k1, pi, pj, x, u, radius, half, b0, b1, b2, p0, p1, p2, use_sep,
+                sep_sigma, sep_shrink, dcoh, fj, A, ka, kb):
+    """The listed pairs ``k0:k1`` that the motion bound does not rule out
+    (:func:`pair_pass`'s test) into the columns of scratch ``A``, ``ka`` their pair
+    indices, ``kb`` the others (every pair is copied to the next free column, which only
+    a pair kept keeps). Returns the two counts."""
+    m = 0
+    mo = 0
+    for k in range(k0, k1):
+        i = pi[k]
+        j = pj[k]
+        rj = radius[j]
+        ri = radius[i]
+        reach = ri + rj + dcoh
+        keep = not (use_sep and sep_sigma * fj[k, SEP] - sep_shrink > reach * (1.0 + 1e-9))
+        d0, d1, d2 = min_image(x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2], b0,
+                               b1, b2, p0, p1, p2)
+        ka[m] = k
+        kb[mo] = k
+        A[_AD * RCAP + m] = d0
+        A[(_AD + 1) * RCAP + m] = d1
+        A[(_AD + 2) * RCAP + m] = d2
+        for c in range(3):
+            A[(_AUI + c) * RCAP + m] = u[i, c]
+            A[(_AUJ + c) * RCAP + m] = u[j, c]
+        A[_AHI * RCAP + m] = half[i]
+        A[_AHJ * RCAP + m] = half[j]
+        A[_ARI * RCAP + m] = ri
+        A[_ARJ * RCAP + m] = rj
+        m += keep
+        mo += not keep
+    return m, mo
+
+
+@njit
+def _rod_geometry(A, ma):
+    """Closest points of the ``ma`` gathered pairs (:func:`spine_gap` with every path of
+    :func:`pysim.geometry.closest_params` computed and the one it takes selected, so that
+    the loop runs on SIMD lanes: the same values, the same bits)."""
+    for m in range(ma):
+        d0 = A[_AD * RCAP + m]
+        d1 = A[(_AD + 1) * RCAP + m]
+        d2 = A[(_AD + 2) * RCAP + m]
+        ui0 = A[_AUI * RCAP + m]
+        ui1 = A[(_AUI + 1) * RCAP + m]
+        ui2 = A[(_AUI + 2) * RCAP + m]
+        uj0 = A[_AUJ * RCAP + m]
+        uj1 = A[(_AUJ + 1) * RCAP + m]
+        uj2 = A[(_AUJ + 2) * RCAP + m]
+        hi = A[_AHI * RCAP + m]
+        hj = A[_AHJ * RCAP + m]
+        s, t = closest_select(-d0, -d1, -d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj)
+        a0 = s * ui0
+        a1 = s * ui1
+        a2 = s * ui2
+        g0 = d0 + t * uj0 - a0
+        g1 = d1 + t * uj1 - a1
+        g2 = d2 + t * uj2 - a2
+        A[_AA * RCAP + m] = a0
+        A[(_AA + 1) * RCAP + m] = a1
+        A[(_AA + 2) * RCAP + m] = a2
+        A[_AG * RCAP + m] = g0
+        A[(_AG + 1) * RCAP + m] = g1
+        A[(_AG + 2) * RCAP + m] = g2
+        A[_ADIST2 * RCAP + m] = g0 * g0 + g1 * g1 + g2 * g2
+
+
+@njit
+def _rod_select(A, ma, ka, kb, mo, pi, pj, v, omega, hist, dcoh, friction, R, kr):
+    """Copy the pairs of ``A`` within reach (``|g| < R_i + R_j + d_c``) with their
+    velocities, spins and springs into scratch ``R`` (``kr`` their pair indices); append
+    the others to ``kb``. Returns the number in reach and the new length of ``kb``."""
+    mr = 0
+    for m in range(ma):
+        k = ka[m]
+        ri = A[_ARI * RCAP + m]
+        rj = A[_ARJ * RCAP + m]
+        reach = ri + rj + dcoh
+        dist2 = A[_ADIST2 * RCAP + m]
+        if dist2 >= reach * reach:
+            kb[mo] = k
+            mo += 1
+            continue
+        i = pi[k]
+        j = pj[k]
+        kr[mr] = k
+        for c in range(3):
+            R[(_RD + c) * RCAP + mr] = A[(_AD + c) * RCAP + m]
+            R[(_RA + c) * RCAP + mr] = A[(_AA + c) * RCAP + m]
+            R[(_RG + c) * RCAP + mr] = A[(_AG + c) * RCAP + m]
+            R[(_RVI + c) * RCAP + mr] = v[i, c]
+            R[(_RVJ + c) * RCAP + mr] = v[j, c]
+            R[(_RWI + c) * RCAP + mr] = omega[i, c]
+            R[(_RWJ + c) * RCAP + mr] = omega[j, c]
+        if friction:
+            for c in range(3):
+                R[(_RH + c) * RCAP + mr] = hist[k, c]
+        R[_RDIST2 * RCAP + mr] = dist2
+        R[_RRI * RCAP + mr] = ri
+        R[_RRJ * RCAP + mr] = rj
+        mr += 1
+    return mr, mo
+
+
+@njit
+def _rod_laws(R, mr, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
+    """:func:`pair_force` of the ``mr`` pairs in reach of ``R``, with selects instead of
+    branches on the pair (SIMD lanes), and :func:`pair_pass`'s sums of one bond: the
+    force on i, the torques on i and j, the elastic energy (0 out of overlap), the spring
+    (in place) and the overlap. On ``mr`` rounded up to :data:`PAD` columns."""
+    cohesive = fcoh != 0.0
+    mr = min(RCAP, (mr + PAD - 1) // PAD * PAD)
+    for m in range(mr):
+        g0 = R[_RG * RCAP + m]
+        g1 = R[(_RG + 1) * RCAP + m]
+        g2 = R[(_RG + 2) * RCAP + m]
+        a0 = R[_RA * RCAP + m]
+        a1 = R[(_RA + 1) * RCAP + m]
+        a2 = R[(_RA + 2) * RCAP + m]
+        d0 = R[_RD * RCAP + m]
+        d1 = R[(_RD + 1) * RCAP + m]
+        d2 = R[(_RD + 2) * RCAP + m]
+        ri = R[_RRI * RCAP + m]
+        rj = R[_RRJ * RCAP + m]
+        dist = np.sqrt(R[_RDIST2 * RCAP + m])
+        inv = 1.0 / dist
+        n0 = g0 * inv
+        n1 = g1 * inv
+        n2 = g2 * inv
+        rs = ri + rj
+        delta = rs - dist
+        ar = ri - 0.5 * delta
+        c0 = a0 + ar * n0
+        c1 = a1 + ar * n1
+        c2 = a2 + ar * n2
+        e0 = c0 - d0
+        e1 = c1 - d1
+        e2 = c2 - d2
+        wi0 = R[_RWI * RCAP + m]
+        wi1 = R[(_RWI + 1) * RCAP + m]
+        wi2 = R[(_RWI + 2) * RCAP + m]
+        wj0 = R[_RWJ * RCAP + m]
+        wj1 = R[(_RWJ + 1) * RCAP + m]
+        wj2 = R[(_RWJ + 2) * RCAP + m]
+        vr0 = (R[_RVI * RCAP + m] + (wi1 * c2 - wi2 * c1) - R[_RVJ * RCAP + m]
+               - (wj1 * e2 - wj2 * e1))
+        vr1 = (R[(_RVI + 1) * RCAP + m] + (wi2 * c0 - wi0 * c2) - R[(_RVJ + 1) * RCAP + m]
+               - (wj2 * e0 - wj0 * e2))
+        vr2 = (R[(_RVI + 2) * RCAP + m] + (wi0 * c1 - wi1 * c0) - R[(_RVJ + 2) * RCAP + m]
+               - (wj0 * e1 - wj1 * e0))
+        vn = vr0 * n0 + vr1 * n1 + vr2 * n2
+        touch = delta > 0.0
+        fn = normal_force(law, kn, gn, delta, vn, rs) if touch else 0.0
+        if cohesive:
+            fn += cohesion_force(fcoh, dcoh, delta)
+        ft0 = 0.0
+        ft1 = 0.0
+        ft2 = 0.0
+        if friction:
+            f0, f1, f2, x0, x1, x2 = tangential_force(
+                kt, gt, mu, fn, R[_RH * RCAP + m], R[(_RH + 1) * RCAP + m],
+                R[(_RH + 2) * RCAP + m], n0, n1, n2, vr0 - vn * n0, vr1 - vn * n1,
+                vr2 - vn * n2, dt)
+            ft0 = f0 if touch else 0.0
+            ft1 = f1 if touch else 0.0
+            ft2 = f2 if touch else 0.0
+            R[_RH * RCAP + m] = x0 if touch else 0.0
+            R[(_RH + 1) * RCAP + m] = x1 if touch else 0.0
+            R[(_RH + 2) * RCAP + m] = x2 if touch else 0.0
+        B0 = -fn * n0 + ft0
+        B1 = -fn * n1 + ft1
+        B2 = -fn * n2 + ft2
+        R[_RF * RCAP + m] = 0.0 + B0
+        R[(_RF + 1) * RCAP + m] = 0.0 + B1
+        R[(_RF + 2) * RCAP + m] = 0.0 + B2
+        R[_RT * RCAP + m] = 0.0 + (c1 * B2 - c2 * B1)
+        R[(_RT + 1) * RCAP + m] = 0.0 + (c2 * B0 - c0 * B2)
+        R[(_RT + 2) * RCAP + m] = 0.0 + (c0 * B1 - c1 * B0)
+        R[_RU * RCAP + m] = 0.0 - (e1 * B2 - e2 * B1)
+        R[(_RU + 1) * RCAP + m] = 0.0 - (e2 * B0 - e0 * B2)
+        R[(_RU + 2) * RCAP + m] = 0.0 - (e0 * B1 - e1 * B0)
+        R[_RDELTA * RCAP + m] = delta
+        R[_RPE * RCAP + m] = 0.0 + elastic_energy(law, kn, delta, rs) if touch else 0.0
+
+
+@njit
+def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, fj, stats, blk, b, R, kr,
+                 mr, kb, mo, scatter, s0, s1, s2, q0, q1, q2):
+    """As :func:`_sphere_scatter` for the pairs in reach of ``R``: row sums, reactions
+    (added to j, or stored in ``fj``), springs, and the block's energy, contacts and
+    virial; zero the spring and reaction of the pairs ``kb`` out of reach. Returns the
+    row and partial sums after the chunk."""
+    for q in range(mo):
+        k = kb[q]
+        if friction:
+            hist[k, 0] = 0.0
+            hist[k, 1] = 0.0
+            hist[k, 2] = 0.0
+        if not scatter:
+            for c in range(FJ_COLUMNS):
+                fj[k, c] = 0.0
+    for m in range(mr):
+        k = kr[m]
+        while istart[i + 1] <= k:
+            _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter)
+            s0 = 0.0
+            s1 = 0.0
+            s2 = 0.0
+            q0 = 0.0
+            q1 = 0.0
+            q2 = 0.0
+            i += 1
+        F0 = R[_RF * RCAP + m]
+        F1 = R[(_RF + 1) * RCAP + m]
+        F2 = R[(_RF + 2) * RCAP + m]
+        r0 = R[_RU * RCAP + m]
+        r1 = R[(_RU + 1) * RCAP + m]
+        r2 = R[(_RU + 2) * RCAP + m]
+        if friction:
+            hist[k, 0] = R[_RH * RCAP + m]
+            hist[k, 1] = R[(_RH + 1) * RCAP + m]
+            hist[k, 2] = R[(_RH + 2) * RCAP + m]
+        s0 += F0
+        s1 += F1
+        s2 += F2
+        q0 += R[_RT * RCAP + m]
+        q1 += R[(_RT + 1) * RCAP + m]
+        q2 += R[(_RT + 2) * RCAP + m]
+        if scatter:
+            j = pj[k]
+            f[j, 0] -= F0
+            f[j, 1] -= F1
+            f[j, 2] -= F2
+            torque[j, 0] += r0
+            torque[j, 1] += r1
+            torque[j, 2] += r2
+        else:
+            fj[k, 0] = -F0
+            fj[k, 1] = -F1
+            fj[k, 2] = -F2
+            fj[k, 3] = r0
+            fj[k, 4] = r1
+            fj[k, 5] = r2
+        if stats:
+            blk[b, 0] += R[_RPE * RCAP + m]
+            blk[b, 1] += 1.0
+            d0 = R[_RD * RCAP + m]
+            d1 = R[(_RD + 1) * RCAP + m]
+            d2 = R[(_RD + 2) * RCAP + m]
+            blk[b, 2] += d0 * F0
+            blk[b, 3] += d0 * F1
+            blk[b, 4] += d0 * F2
+            blk[b, 5] += d1 * F0
+            blk[b, 6] += d1 * F1
+            blk[b, 7] += d1 * F2
+            blk[b, 8] += d2 * F0
+            blk[b, 9] += d2 * F1
+            blk[b, 10] += d2 * F2
+    while i < hi and istart[i + 1] <= k1:  # the rows that end with the chunk
+        _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter)
+        s0 = 0.0
+        s1 = 0.0
+        s2 = 0.0
+        q0 = 0.0
+        q1 = 0.0
+        q2 = 0.0
+        i += 1
+    return i, s0, s1, s2, q0, q1, q2
+
+
+@pnjit
+def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, hist, law, p,
+             friction, dt, f, torque, fj, stats, virial, sep_sigma=0.0, sep_shrink=0.0,
+             scatter=False):
+    """:func:`pair_pass` for rods with one bond per pair (not ``end_bonds``): the same
+    equations, sums and outputs in the same order (the same bits), in chunks of
+    :data:`RCAP` listed pairs and five loops: gather the pairs the motion bound does not
+    rule out (:func:`_rod_gather`), their closest points on SIMD lanes
+    (:func:`_rod_geometry`), the pairs in reach with their velocities
+    (:func:`_rod_select`), their laws on SIMD lanes (:func:`_rod_laws`), and the sums
+    in pair order (:func:`_rod_scatter`). ``pi`` the first member of each pair."""
+    n = x.shape[0]
+    kn, gn, kt, gt, mu = p[K_N], p[GAMMA_N], p[K_T], p[GAMMA_T], p[MU]
+    fcoh, dcoh = p[F_COH], p[D_COH]
+    b0, b1, b2 = box[0], box[1], box[2]
+    p0, p1, p2 = periodic[0], periodic[1], periodic[2]
+    use_sep = sep_sigma > 0.0 and fj.shape[1] > SEP
+    nb = (n + BLOCK - 1) // BLOCK
+    blk = np.zeros((nb if stats else 0, _STATS))
+    if scatter:
+        _zero(f, torque)
+    nc = 1 if scatter else (nb + _CHUNK - 1) // _CHUNK
+    for c in prange(nc):
+        A = np.zeros(_NA * RCAP)
+        R = np.zeros(_NR * RCAP)  # zeros: the padding columns never hold garbage
+        ka = np.empty(RCAP, np.int64)
+        kb = np.empty(RCAP, np.int64)
+        kr = np.empty(RCAP, np.int64)
+        b_end = nb if scatter else min(nb, (c + 1) * _CHUNK)
+        for b in range(0 if scatter else c * _CHUNK, b_end):
+            lo = b * BLOCK
+            hi = min(n, lo + BLOCK)
+            i = lo
+            s0 = 0.0
+            s1 = 0.0
+            s2 = 0.0
+            q0 = 0.0
+            q1 = 0.0
+            q2 = 0.0
+            k0 = istart[lo]
+            k_end = istart[hi]
+            while True:
+                k1 = min(k_end, k0 + RCAP)
+                ma, mo = _rod_gather(k0, k1, pi, pj, x, u, radius, half, b0, b1, b2, p0, p1,
+                                     p2, use_sep, sep_sigma, sep_shrink, dcoh, fj, A, ka, kb)
+                _rod_geometry(A, ma)
+                mr, mo = _rod_select(A, ma, ka, kb, mo, pi, pj, v, omega, hist, dcoh,
+                                     friction, R, kr)
+                _rod_laws(R, mr, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt)
+                i, s0, s1, s2, q0, q1, q2 = _rod_scatter(
+                    k1, i, hi, pj, istart, hist, friction, f, torque, fj, stats, blk, b, R,
+                    kr, mr, kb, mo, scatter, s0, s1, s2, q0, q1, q2)
                 k0 = k1
                 if k0 >= k_end:
                     break

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pysim.jit import njit
+from pysim.jit import inline_njit, njit
 
 #: |u_a x u_b|^2 below which two spines are treated as parallel
 PARALLEL_TOL = 1e-10
@@ -72,6 +72,49 @@ def closest_params(r0, r1, r2, ua0, ua1, ua2, ha, ub0, ub1, ub2, hb):
     if q1 <= q2:
         return s1, t1
     return s2, t2
+
+
+@inline_njit
+def closest_select(r0, r1, r2, ua0, ua1, ua2, ha, ub0, ub1, ub2, hb):
+    """:func:`closest_params` without branches on the pair: every path is computed and the
+    one :func:`closest_params` takes is selected (the same values, the same bits; the
+    paths not taken may give inf or NaN), so that a loop over pairs can run on SIMD
+    lanes (:func:`pysim.contacts.rod_pass`)."""
+    b = ua0 * ub0 + ua1 * ub1 + ua2 * ub2
+    d = ua0 * r0 + ua1 * r1 + ua2 * r2
+    e = ub0 * r0 + ub1 * r1 + ub2 * r2
+    t_sphere_a = _clamp(e, -hb, hb)  # spine a a point
+    s_sphere_b = _clamp(-d, -ha, ha)  # spine b a point
+    denom = 1.0 - b * b
+    # parallel spines
+    sgn = 1.0 if b >= 0.0 else -1.0
+    lo = max(-ha, -hb - d)
+    hi = min(ha, hb - d)
+    s_par = 0.5 * (lo + hi) if lo <= hi else (ha if -hb - d > ha else -ha)
+    t_par = _clamp(sgn * (s_par + d), -hb, hb)
+    # the unconstrained minimum, else the better of the two clamped solutions
+    s = (b * e - d) / denom
+    t = (e - b * d) / denom
+    inside = (-ha <= s) & (s <= ha) & (-hb <= t) & (t <= hb)
+    s1 = _clamp(s, -ha, ha)
+    t1 = _clamp(b * s1 + e, -hb, hb)
+    s1 = _clamp(b * t1 - d, -ha, ha)
+    t2 = _clamp(t, -hb, hb)
+    s2 = _clamp(b * t2 - d, -ha, ha)
+    t2 = _clamp(b * s2 + e, -hb, hb)
+    first = (_dist2s(r0, r1, r2, ua0, ua1, ua2, ub0, ub1, ub2, s1, t1)
+             <= _dist2s(r0, r1, r2, ua0, ua1, ua2, ub0, ub1, ub2, s2, t2))
+    s_out = s if inside else (s1 if first else s2)
+    t_out = t if inside else (t1 if first else t2)
+    parallel = denom < PARALLEL_TOL
+    s_out = s_par if parallel else s_out
+    t_out = t_par if parallel else t_out
+    s_out = s_sphere_b if hb == 0.0 else s_out
+    t_out = 0.0 if hb == 0.0 else t_out
+    s_out = 0.0 if ha == 0.0 else s_out
+    t_out = t_sphere_a if ha == 0.0 else t_out
+    points = (ha == 0.0) & (hb == 0.0)
+    return (0.0 if points else s_out), (0.0 if points else t_out)
 
 
 @njit

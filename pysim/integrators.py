@@ -37,7 +37,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pysim.contacts import PAIR_SCRATCH, SEP, pair_pass, reduce_pass, sphere_pass
+from pysim.contacts import PAIR_SCRATCH, SEP, pair_pass, reduce_pass, rod_pass, sphere_pass
+from pysim.forces import END_BONDS
 from pysim.jit import njit, pnjit, prange
 from pysim.neighbors import (build_list, motion_bound, spine_separations, stale_by_bound,
                              transfer_rows)
@@ -158,10 +159,14 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, js
     # one thread (sys[SCATTER] = 1, set by the caller): the contact pass adds the
     # reactions itself, its rows running in order (the same bits as with threads)
     scatter = sys[SCATTER] != 0.0
-    if sys[RODS] != 0.0:
+    if sys[RODS] != 0.0 and cp[END_BONDS] != 0.0:
         pe, nc = pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law,
                            cp, friction, dt, True, f, torque, fj, stats, virial, sys[SEP_SIGMA],
                            sys[SEP_SHRINK], scatter)
+    elif sys[RODS] != 0.0:
+        pe, nc = rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, hist,
+                          law, cp, friction, dt, f, torque, fj, stats, virial, sys[SEP_SIGMA],
+                          sys[SEP_SHRINK], scatter)
     else:
         pe, nc = sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, hist, law, cp,
                              friction, dt, f, torque, fj, stats, virial, scatter)

@@ -70,6 +70,11 @@ numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
 njit = numba.njit(**JIT_FLAGS)
 """Decorator: ``@njit`` compiles a kernel with the project's JIT flags."""
 
+inline_njit = numba.njit(**JIT_FLAGS, inline="always")
+"""Decorator: ``@inline_njit`` compiles a kernel that Numba inlines into its callers (LLVM
+declines to inline a large one, and a loop that calls a function cannot run on SIMD
+lanes)."""
+
 pnjit = numba.njit(**PARALLEL_FLAGS)
 """Decorator: ``@pnjit`` compiles a kernel whose ``prange`` loops run on threads."""
 
