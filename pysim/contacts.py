@@ -932,7 +932,9 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, fj, stats, bl
     """As :func:`_sphere_scatter` for the pairs in reach of ``R``: row sums, reactions
     (added to j, or stored in ``fj``), springs, and the block's energy, contacts and
     virial; zero the spring and reaction of the pairs ``kb`` out of reach. Returns the
-    row and partial sums after the chunk."""
+    row and partial sums after the chunk. Kept apart from :func:`_sphere_scatter`, not
+    one function with the scratch layout as arguments: with runtime row offsets the
+    sphere steps took 2-3 % longer (measured)."""
     for q in range(mo):
         k = kb[q]
         if friction:
