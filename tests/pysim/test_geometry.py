@@ -101,3 +101,45 @@ def test_many_matches_single(rng):
     s, t = segment_closest_many(*arrs)
     for k, p in enumerate(pairs):
         assert (s[k], t[k]) == segment_closest(*p)
+
+
+def test_closest_select_equals_closest_params_bit_for_bit(rng):
+    """The branch-free closest points (rod_pass's SIMD loop) are the branching search's,
+    bit for bit, on every path: points, a point and a segment, parallel and antiparallel
+    spines (overlapping projections or not), nearly parallel ones, the interior minimum
+    and both clamped solutions."""
+    from pysim.geometry import PARALLEL_TOL, closest_params, closest_select
+
+    cases = []
+    for _ in range(4000):
+        r = rng.normal(0, 1.5, 3)
+        ua = rng.normal(size=3)
+        ua /= np.linalg.norm(ua)
+        ub = rng.normal(size=3)
+        ub /= np.linalg.norm(ub)
+        kind = rng.integers(6)
+        if kind == 1:
+            ub = ua.copy()
+        elif kind == 2:
+            ub = -ua
+        elif kind == 3:
+            ub = ua + rng.normal(0, 1e-6, 3)
+            ub /= np.linalg.norm(ub)
+        ha, hb = rng.uniform(0, 2, 2)
+        if kind == 4:
+            ha = 0.0
+        elif kind == 5:
+            hb = 0.0 if rng.random() < 0.5 else hb
+            ha = 0.0 if hb != 0.0 and rng.random() < 0.5 else ha
+        cases.append((*r, *ua, ha, *ub, hb))
+    cases.append((0.1, 0.2, 0.3, 0, 0, 1, 0.0, 0, 0, 1, 0.0))  # two points
+    paths = set()
+    for c in cases:
+        a = closest_params(*c)
+        b = closest_select(*c)
+        assert np.array_equal(np.array(a), np.array(b)) and np.signbit(a).tolist() == \
+            np.signbit(b).tolist(), c
+        ub = np.array(c[7:10])
+        paths.add(("parallel" if 1 - np.dot(c[3:6], ub) ** 2 < PARALLEL_TOL else "general",
+                   c[6] == 0.0, c[10] == 0.0))
+    assert len(paths) >= 5
