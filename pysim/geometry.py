@@ -92,9 +92,11 @@ def closest_select(r0, r1, r2, ua0, ua1, ua2, ha, ub0, ub1, ub2, hb):
     hi = min(ha, hb - d)
     s_par = 0.5 * (lo + hi) if lo <= hi else (ha if -hb - d > ha else -ha)
     t_par = _clamp(sgn * (s_par + d), -hb, hb)
-    # the unconstrained minimum, else the better of the two clamped solutions
-    s = (b * e - d) / denom
-    t = (e - b * d) / denom
+    # the unconstrained minimum, else the better of the two clamped solutions (divided by
+    # 1 where the spines are parallel and this path is not taken: no division by zero)
+    q = denom if denom >= PARALLEL_TOL else 1.0
+    s = (b * e - d) / q
+    t = (e - b * d) / q
     inside = (-ha <= s) & (s <= ha) & (-hb <= t) & (t <= hb)
     s1 = _clamp(s, -ha, ha)
     t1 = _clamp(b * s1 + e, -hb, hb)
