@@ -212,6 +212,17 @@ def test_short_trajectory_against_numpy_velocity_verlet():
     np.testing.assert_allclose(st.v, vr, rtol=1e-9, atol=1e-9)
 
 
+def chunk_test_law(law, friction):
+    """``(law id, parameters)`` of the chunked passes' tests: the linear law, or Hertz with
+    cohesion (pairs in a cohesive gap), with or without friction."""
+    from pysim.forces import HERTZ
+
+    mu = 0.5 if friction else 0.0
+    if law == "hooke":
+        return HOOKE, contact_params(1e4, 5.0, k_t=5e3, gamma_t=1.0, mu=mu)
+    return HERTZ, contact_params(1e5, 5.0, k_t=5e3, gamma_t=1.0, mu=mu, f_coh=3.0, d_coh=0.05)
+
+
 @pytest.mark.parametrize("scatter", [False, True])
 @pytest.mark.parametrize("law", ["hooke", "hertz_cohesive"])
 @pytest.mark.parametrize("friction", [False, True])
@@ -221,7 +232,6 @@ def test_sphere_pass_equals_the_general_pass(rng, friction, law, scatter):
     reactions stored per pair or added at once, for the linear law and for Hertz with
     cohesion (pairs in a cohesive gap); rows and blocks span several chunks."""
     from pysim.contacts import BLOCK, CAP, pair_pass, sphere_pass
-    from pysim.forces import HERTZ, HOOKE, contact_params
     from pysim.neighbors import build_list
 
     n = 300
@@ -235,12 +245,7 @@ def test_sphere_pass_equals_the_general_pass(rng, friction, law, scatter):
     per = np.ones(3, bool)
     pi, pj, istart, jstart, jk = build_list(x, u, r, half, box, per, 0.3)
     assert istart[BLOCK] > CAP  # the first block runs in more than one chunk
-    mu = 0.5 if friction else 0.0
-    if law == "hooke":
-        law_id, p = HOOKE, contact_params(1e4, 5.0, k_t=5e3, gamma_t=1.0, mu=mu)
-    else:
-        law_id, p = HERTZ, contact_params(1e5, 5.0, k_t=5e3, gamma_t=1.0, mu=mu, f_coh=3.0,
-                                          d_coh=0.05)
+    law_id, p = chunk_test_law(law, friction)
     out = []
     for kernel in ("general", "spheres"):
         hist = np.tile([1e-4, -2e-4, 3e-4], (len(pj), 1)) if friction else np.zeros((len(pj), 0))
@@ -355,7 +360,6 @@ def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, scatt
     pairs, pairs in a cohesive gap, pairs skipped by the motion bound, and rows and
     blocks over several chunks."""
     from pysim.contacts import BLOCK, PAIR_SCRATCH, RCAP, SEP, rod_pass
-    from pysim.forces import HERTZ, contact_params
     from pysim.neighbors import motion_bound, spine_separations
 
     n = 400
@@ -376,12 +380,7 @@ def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, scatt
     sigma, shrink = motion_bound(x, x_ref, u, u_ref, half, box, box_ref, PER, half.max(), 1.0)
     v = rng.normal(0, 1, (n, 3))
     w = rng.normal(0, 1, (n, 3))
-    mu = 0.5 if friction else 0.0
-    if law == "hooke":
-        law_id, p = HOOKE, contact_params(1e4, 5.0, k_t=5e3, gamma_t=1.0, mu=mu)
-    else:
-        law_id, p = HERTZ, contact_params(1e5, 5.0, k_t=5e3, gamma_t=1.0, mu=mu, f_coh=3.0,
-                                          d_coh=0.05)
+    law_id, p = chunk_test_law(law, friction)
     hist0 = rng.normal(0, 1e-4, (len(pi), 3)) if friction else np.zeros((len(pi), 0))
     out = []
     for kernel in ("general", "rods"):
