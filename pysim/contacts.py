@@ -25,7 +25,10 @@ loops call them:
   sums in the same order, with the contact laws of a chunk of pairs evaluated together
   on SIMD lanes (gather, laws, scatter). :func:`rod_pass` replaces it for rods with one
   bond per pair: the closest points and the laws of a chunk on SIMD lanes, the same
-  bits (``end_bonds`` rods keep ``pair_pass``).
+  bits (``end_bonds`` rods keep ``pair_pass``). These two scatter on threads as well:
+  each thread takes a contiguous part of the rows and adds the reactions at once, except
+  on the few particles that also receive reactions from an earlier part, whose
+  reactions are stored per pair and summed in pair order afterwards (the same sum).
 * :func:`pair_forces`, a plain serial loop in pair order that can also record the
   contact table (used with each dump, and by the tests).
 
@@ -397,11 +400,12 @@ PAD = 16
 
 @njit
 def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, hist, dcoh,
-                   friction, scatter, fj, S, kk, ko):
+                   friction, solo, hp, shared, fj, S, kk, ko):
     """Copy the listed pairs ``k0:k1`` within reach (``|d| < R_i + R_j + d_c``) into the
     scratch ``S``, one column each in pair order, ``kk`` their pair indices; zero the
-    spring of every pair out of reach and, with ``scatter`` off, its reaction
-    (:func:`_sphere_scatter` writes those of the pairs in reach). Two loops: the first
+    spring of every pair out of reach and, when its reaction is stored (not ``solo``, the
+    only part, and ``j`` at or past the part's end ``hp`` or ``shared``), its reaction (:func:`_sphere_scatter` writes
+    those of the pairs in reach). Two loops: the first
     takes the gap of every pair without branches on the pair (each is copied to the next
     free column, which only a pair in reach keeps; ``ko`` collects the others), the
     second copies velocities, spins and springs of the pairs in reach only. Returns the
@@ -457,10 +461,11 @@ def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, 
                 S[(_WI + c) * CAP + q] = omega[i, c]
                 S[(_WJ + c) * CAP + q] = omega[j, c]
                 S[(_H + c) * CAP + q] = hist[k, c]
-    if friction or not scatter:
+    if friction or not solo:
         for q in range(mo):  # out of reach: no reaction, and the spring restarts
             k = ko[q]
-            if not scatter:
+            j = pj[k]
+            if not solo and (j >= hp or shared[np.uint64(j)]):
                 for c in range(FJ_COLUMNS):
                     fj[k, c] = 0.0
             if friction:
@@ -573,16 +578,18 @@ def _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
 
 @njit
 def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, fj, stats,
-                    blk, b, S, kk, mc, scatter, s0, s1, s2, q0, q1, q2):
+                    blk, b, S, kk, mc, solo, hp, shared, s0, s1, s2, q0, q1, q2):
     """Add the forces of the ``mc`` pairs in reach of the chunk ``k0:k1`` in pair order, as
     :func:`pair_pass` does, and store their springs. ``i`` is the row of pair ``k0``, ``s``
     and ``q`` its partial force and torque sums; rows (of block ``b``, up to ``hi``) that
-    end within the chunk are completed (:func:`_finish_row`). Adds the block's energy,
+    end within the chunk are completed (:func:`_finish_row`). The reaction on ``j`` is
+    added to ``f_j`` at once in the ``solo`` part or when ``j`` is in this part (below
+    ``hp``) and not ``shared``, else stored in ``fj`` (:func:`_close_part`). Adds the block's energy,
     contacts and virial to ``blk[b]``. Returns the row and partial sums after the chunk."""
     for m in range(mc):
         k = kk[m]
         while istart[i + 1] <= k:
-            _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter)
+            _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or not shared[i])
             s0 = 0.0
             s1 = 0.0
             s2 = 0.0
@@ -615,14 +622,15 @@ def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torqu
         q0 += t0
         q1 += t1
         q2 += t2
-        if scatter:
-            j = np.uint64(pj[k])
-            f[j, 0] -= F0
-            f[j, 1] -= F1
-            f[j, 2] -= F2
-            torque[j, 0] += u0
-            torque[j, 1] += u1
-            torque[j, 2] += u2
+        j = pj[k]
+        if solo or (j < hp and not shared[np.uint64(j)]):
+            ju = np.uint64(j)
+            f[ju, 0] -= F0
+            f[ju, 1] -= F1
+            f[ju, 2] -= F2
+            torque[ju, 0] += u0
+            torque[ju, 1] += u1
+            torque[ju, 2] += u2
         else:
             fj[k, 0] = -F0
             fj[k, 1] = -F1
@@ -649,7 +657,7 @@ def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torqu
             blk[b, 9] += d2 * F1
             blk[b, 10] += d2 * F2
     while i < hi and istart[i + 1] <= k1:  # the rows that end with the chunk
-        _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter)
+        _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or not shared[i])
         s0 = 0.0
         s1 = 0.0
         s2 = 0.0
@@ -660,20 +668,26 @@ def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torqu
     return i, s0, s1, s2, q0, q1, q2
 
 
-#: blocks of rows per scratch allocation when threaded (one allocation in all on one thread)
-_CHUNK = 8
-
-
 @pnjit
-def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, hist, law, p, friction, dt,
-                f, torque, fj, stats, virial, scatter=False):
+def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, hist, law, p,
+                friction, dt, f, torque, fj, stats, virial, parts=1):
     """:func:`pair_pass` for spheres only (every ``L = 0``): the same equations and the
     same outputs, several times faster. The normal passes through both centres, so
     normal forces exert no torque; with friction the tangential force does, ``c x F_t``
     on i and ``-e x F_t`` on j (``c``, ``e`` the contact point relative to the centres).
     The minimum image is taken by comparison with half the box (positions are wrapped
-    into the box). ``pi`` the first member of each pair; ``scatter`` as in
-    :func:`pair_pass`.
+    into the box). ``pi`` the first member of each pair, ``jstart``/``jk`` the
+    transposed list (:func:`pysim.neighbors.transpose`). Writes the complete pair
+    forces and torques (no :func:`reduce_pass` needed).
+
+    The rows are cut into ``parts`` contiguous parts (:func:`part_bounds`, one per
+    thread). A part adds each reaction to its second particle at once, as
+    :func:`pair_pass` does on one thread, unless that particle lies past the part or
+    also receives reactions from an earlier part (``shared``): those reactions are
+    stored per pair and summed from zero in pair order after the parts
+    (:func:`_close_part`). Either way ``f_i = row sum + reaction sum`` in pair order, so
+    any number of parts gives the same bits; with spatially sorted particles few are
+    shared, and the threads touch no more memory than one thread does.
 
     Each block of rows runs in chunks of at most ``CAP`` listed pairs, in three loops:
     :func:`_sphere_gather` copies the pairs in reach into a scratch, one column each,
@@ -687,15 +701,16 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, hist, law, p
     p0, p1, p2 = periodic[0], periodic[1], periodic[2]
     nb = (n + BLOCK - 1) // BLOCK
     blk = np.zeros((nb if stats else 0, _STATS))
-    if scatter:
-        _zero(f, torque)
-    nc = 1 if scatter else (nb + _CHUNK - 1) // _CHUNK
-    for c in prange(nc):
+    nt = max(1, parts)
+    bounds = part_bounds(istart, nb, nt)
+    shared = np.empty(n if nt > 1 else 0, np.bool_)  # read only with parts
+    for t in prange(nt):
+        hp = min(n, bounds[t + 1] * BLOCK)
+        _open_part(bounds[t] * BLOCK, hp, pi, jstart, jk, f, torque, shared)
         S = np.zeros(_NS * CAP)  # zeros: the padding columns never hold garbage
         kk = np.empty(CAP, np.int64)
         ko = np.empty(CAP, np.int64)
-        b_end = nb if scatter else min(nb, (c + 1) * _CHUNK)
-        for b in range(0 if scatter else c * _CHUNK, b_end):
+        for b in range(bounds[t], bounds[t + 1]):
             lo = b * BLOCK
             hi = min(n, lo + BLOCK)
             i = lo
@@ -710,14 +725,19 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, hist, law, p
             while True:
                 k1 = min(k_end, k0 + CAP)
                 mc = _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1,
-                                    p2, hist, dcoh, friction, scatter, fj, S, kk, ko)
+                                    p2, hist, dcoh, friction, nt == 1, hp, shared, fj, S, kk,
+                                    ko)
                 _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt)
                 i, s0, s1, s2, q0, q1, q2 = _sphere_scatter(
                     k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, fj, stats,
-                    blk, b, S, kk, mc, scatter, s0, s1, s2, q0, q1, q2)
+                    blk, b, S, kk, mc, nt == 1, hp, shared, s0, s1, s2, q0, q1, q2)
                 k0 = k1
                 if k0 >= k_end:
                     break
+    if nt > 1:
+        for t in prange(nt):
+            _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, jk, fj, f,
+                        torque, shared)
     if stats:
         return block_totals(blk, virial)
     return 0.0, 0
@@ -928,10 +948,11 @@ def _rod_laws(R, mr, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
 
 @njit
 def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, fj, stats, blk, b, R, kr,
-                 mr, kb, mo, scatter, s0, s1, s2, q0, q1, q2):
+                 mr, kb, mo, solo, hp, shared, s0, s1, s2, q0, q1, q2):
     """As :func:`_sphere_scatter` for the pairs in reach of ``R``: row sums, reactions
     (added to j, or stored in ``fj``), springs, and the block's energy, contacts and
-    virial; zero the spring and reaction of the pairs ``kb`` out of reach. Returns the
+    virial; zero the spring and the stored reaction of the pairs ``kb`` out of reach.
+    Returns the
     row and partial sums after the chunk. Kept apart from :func:`_sphere_scatter`, not
     one function with the scratch layout as arguments: with runtime row offsets the
     sphere steps took 2-3 % longer (measured)."""
@@ -941,13 +962,14 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, fj, stats, bl
             hist[k, 0] = 0.0
             hist[k, 1] = 0.0
             hist[k, 2] = 0.0
-        if not scatter:
+        j = pj[k]
+        if not solo and (j >= hp or shared[np.uint64(j)]):
             for c in range(FJ_COLUMNS):
                 fj[k, c] = 0.0
     for m in range(mr):
         k = kr[m]
         while istart[i + 1] <= k:
-            _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter)
+            _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or not shared[i])
             s0 = 0.0
             s1 = 0.0
             s2 = 0.0
@@ -971,14 +993,15 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, fj, stats, bl
         q0 += R[_RT * RCAP + m]
         q1 += R[(_RT + 1) * RCAP + m]
         q2 += R[(_RT + 2) * RCAP + m]
-        if scatter:
-            j = pj[k]
-            f[j, 0] -= F0
-            f[j, 1] -= F1
-            f[j, 2] -= F2
-            torque[j, 0] += r0
-            torque[j, 1] += r1
-            torque[j, 2] += r2
+        j = pj[k]
+        if solo or (j < hp and not shared[np.uint64(j)]):
+            ju = np.uint64(j)
+            f[ju, 0] -= F0
+            f[ju, 1] -= F1
+            f[ju, 2] -= F2
+            torque[ju, 0] += r0
+            torque[ju, 1] += r1
+            torque[ju, 2] += r2
         else:
             fj[k, 0] = -F0
             fj[k, 1] = -F1
@@ -1002,7 +1025,7 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, fj, stats, bl
             blk[b, 9] += d2 * F1
             blk[b, 10] += d2 * F2
     while i < hi and istart[i + 1] <= k1:  # the rows that end with the chunk
-        _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter)
+        _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or not shared[i])
         s0 = 0.0
         s1 = 0.0
         s2 = 0.0
@@ -1014,16 +1037,17 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, fj, stats, bl
 
 
 @pnjit
-def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, hist, law, p,
-             friction, dt, f, torque, fj, stats, virial, sep_sigma=0.0, sep_shrink=0.0,
-             scatter=False):
+def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart, jk, hist, law,
+             p, friction, dt, f, torque, fj, stats, virial, sep_sigma=0.0, sep_shrink=0.0,
+             parts=1):
     """:func:`pair_pass` for rods with one bond per pair (not ``end_bonds``): the same
     equations, sums and outputs in the same order (the same bits), in chunks of
     :data:`RCAP` listed pairs and five loops: gather the pairs the motion bound does not
     rule out (:func:`_rod_gather`), their closest points on SIMD lanes
     (:func:`_rod_geometry`), the pairs in reach with their velocities
     (:func:`_rod_select`), their laws on SIMD lanes (:func:`_rod_laws`), and the sums
-    in pair order (:func:`_rod_scatter`). ``pi`` the first member of each pair."""
+    in pair order (:func:`_rod_scatter`). ``pi`` the first member of each pair; the
+    parts and the complete forces as in :func:`sphere_pass`."""
     n = x.shape[0]
     kn, gn, kt, gt, mu = p[K_N], p[GAMMA_N], p[K_T], p[GAMMA_T], p[MU]
     fcoh, dcoh = p[F_COH], p[D_COH]
@@ -1032,17 +1056,18 @@ def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, hist, 
     use_sep = sep_sigma > 0.0 and fj.shape[1] > SEP
     nb = (n + BLOCK - 1) // BLOCK
     blk = np.zeros((nb if stats else 0, _STATS))
-    if scatter:
-        _zero(f, torque)
-    nc = 1 if scatter else (nb + _CHUNK - 1) // _CHUNK
-    for c in prange(nc):
+    nt = max(1, parts)
+    bounds = part_bounds(istart, nb, nt)
+    shared = np.empty(n if nt > 1 else 0, np.bool_)  # read only with parts
+    for t in prange(nt):
+        hp = min(n, bounds[t + 1] * BLOCK)
+        _open_part(bounds[t] * BLOCK, hp, pi, jstart, jk, f, torque, shared)
         A = np.zeros(_NA * RCAP)
         R = np.zeros(_NR * RCAP)  # zeros: the padding columns never hold garbage
         ka = np.empty(RCAP, np.int64)
         kb = np.empty(RCAP, np.int64)
         kr = np.empty(RCAP, np.int64)
-        b_end = nb if scatter else min(nb, (c + 1) * _CHUNK)
-        for b in range(0 if scatter else c * _CHUNK, b_end):
+        for b in range(bounds[t], bounds[t + 1]):
             lo = b * BLOCK
             hi = min(n, lo + BLOCK)
             i = lo
@@ -1064,10 +1089,14 @@ def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, hist, 
                 _rod_laws(R, mr, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt)
                 i, s0, s1, s2, q0, q1, q2 = _rod_scatter(
                     k1, i, hi, pj, istart, hist, friction, f, torque, fj, stats, blk, b, R,
-                    kr, mr, kb, mo, scatter, s0, s1, s2, q0, q1, q2)
+                    kr, mr, kb, mo, nt == 1, hp, shared, s0, s1, s2, q0, q1, q2)
                 k0 = k1
                 if k0 >= k_end:
                     break
+    if nt > 1:
+        for t in prange(nt):
+            _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, jk, fj, f,
+                        torque, shared)
     if stats:
         return block_totals(blk, virial)
     return 0.0, 0
@@ -1079,6 +1108,74 @@ def _zero(f, torque):
         for c in range(3):
             f[i, c] = 0.0
             torque[i, c] = 0.0
+
+
+@njit
+def part_bounds(istart, nb, nparts):
+    """Block bounds ``bounds[t]:bounds[t+1]`` of ``nparts`` contiguous parts of the rows
+    (whole blocks of :data:`BLOCK` rows, so that a block's sums stay in one part), with
+    about equal numbers of listed pairs; parts may be empty."""
+    n = istart.shape[0] - 1
+    total = istart[n]
+    bounds = np.empty(nparts + 1, np.int64)
+    bounds[0] = 0
+    b = 0
+    for t in range(1, nparts):
+        target = total * t // nparts
+        while b < nb and istart[b * BLOCK] < target:
+            b += 1
+        bounds[t] = b
+    bounds[nparts] = nb
+    return bounds
+
+
+@njit
+def _open_part(lo, hi, pi, jstart, jk, f, torque, shared):
+    """Start the part of rows ``lo:hi``: zero their forces and torques, and mark as
+    ``shared`` the particles that are the second member of a pair whose row lies before
+    ``lo`` (in another part). The reactions on a shared particle are stored per pair
+    (``fj``) and added by :func:`_close_part`; the others are added at once."""
+    for i in range(lo, hi):
+        for c in range(3):
+            f[i, c] = 0.0
+            torque[i, c] = 0.0
+    if shared.shape[0] == 0:  # one part: nothing shared
+        return
+    if lo == 0:  # the first part: no rows before it
+        shared[lo:hi] = False
+        return
+    for i in range(lo, hi):
+        q = jstart[i]
+        shared[i] = q < jstart[i + 1] and pi[jk[q]] < lo
+
+
+@njit
+def _close_part(lo, hi, jstart, jk, fj, f, torque, shared):
+    """Complete the shared particles of rows ``lo:hi``: ``f_i = row sum + reaction sum``,
+    the reactions summed from zero in pair order (what :func:`reduce_pass` does)."""
+    for i in range(lo, hi):
+        if not shared[i]:
+            continue
+        g0 = 0.0
+        g1 = 0.0
+        g2 = 0.0
+        h0 = 0.0
+        h1 = 0.0
+        h2 = 0.0
+        for q in range(jstart[i], jstart[i + 1]):
+            k = jk[q]
+            g0 += fj[k, 0]
+            g1 += fj[k, 1]
+            g2 += fj[k, 2]
+            h0 += fj[k, 3]
+            h1 += fj[k, 4]
+            h2 += fj[k, 5]
+        f[i, 0] = f[i, 0] + g0
+        f[i, 1] = f[i, 1] + g1
+        f[i, 2] = f[i, 2] + g2
+        torque[i, 0] = torque[i, 0] + h0
+        torque[i, 1] = torque[i, 1] + h1
+        torque[i, 2] = torque[i, 2] + h2
 
 
 @pnjit

@@ -49,7 +49,7 @@ SQRT_HALF = np.sqrt(0.5)
 
 # indices into the 'sys' scalar array
 (GAMMA_BG, GAMMA_ROT, GX, GY, GZ, EPS_X, EPS_Y, EPS_Z, GROWTH, SKIN, RINT_BUILD, K_D,
- RC_BUILD, HALF_BUILD, RODS, DIM2, SEP_SIGMA, SEP_SHRINK, SCATTER) = range(19)
+ RC_BUILD, HALF_BUILD, RODS, DIM2, SEP_SIGMA, SEP_SHRINK, PARTS) = range(19)
 SYS_SIZE = 19
 
 #: The pair arrays, passed and returned in this order by the kernels: the Verlet list
@@ -60,7 +60,8 @@ SYS_SIZE = 19
 #: :data:`pysim.contacts.SEP`). ``sys[SEP_SIGMA]``, ``sys[SEP_SHRINK]`` hold the motion
 #: bound since the build (:func:`pysim.neighbors.motion_bound`), set by
 #: :func:`maybe_rebuild`; ``SEP_SIGMA = 0`` turns the skipping of pairs out of reach off.
-#: ``sys[SCATTER] = 1`` when the kernels run on one thread (:func:`forces`).
+#: ``sys[PARTS]``: the threads the kernels run on, the parts of the contact pass
+#: (:func:`forces`).
 PAIR_ARRAYS = ("pi", "pj", "istart", "jstart", "jk", "hist", "fj")
 
 
@@ -156,20 +157,23 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, js
     ``-gamma_bg v`` and ``-gamma_rot omega`` (added in that order). With ``stats`` also
     the virial and returns ``(elastic energy, pair contacts, wall contacts)``; without,
     the virial is left as it was and the first two are zero."""
-    # one thread (sys[SCATTER] = 1, set by the caller): the contact pass adds the
-    # reactions itself, its rows running in order (the same bits as with threads)
-    scatter = sys[SCATTER] != 0.0
+    # the sphere and rod passes write complete pair forces on any number of threads (one
+    # part of the rows per thread); the general pass does on one thread only (scatter),
+    # else reduce_pass adds the stored reactions. The same bits either way.
+    parts = int(sys[PARTS])
+    scatter = True
     if sys[RODS] != 0.0 and cp[END_BONDS] != 0.0:
+        scatter = parts == 1
         pe, nc = pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law,
                            cp, friction, dt, True, f, torque, fj, stats, virial, sys[SEP_SIGMA],
                            sys[SEP_SHRINK], scatter)
     elif sys[RODS] != 0.0:
-        pe, nc = rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, hist,
-                          law, cp, friction, dt, f, torque, fj, stats, virial, sys[SEP_SIGMA],
-                          sys[SEP_SHRINK], scatter)
+        pe, nc = rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart,
+                          jk, hist, law, cp, friction, dt, f, torque, fj, stats, virial,
+                          sys[SEP_SIGMA], sys[SEP_SHRINK], parts)
     else:
-        pe, nc = sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, hist, law, cp,
-                             friction, dt, f, torque, fj, stats, virial, scatter)
+        pe, nc = sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk,
+                             hist, law, cp, friction, dt, f, torque, fj, stats, virial, parts)
     gx, gy, gz = sys[GX], sys[GY], sys[GZ]
     gb = sys[GAMMA_BG]
     gr = sys[GAMMA_ROT]

@@ -265,9 +265,9 @@ class Simulation:
             self.dt, self.f, self.torque, self.virial, True)
 
     def _sync_threads(self):
-        """Tell the kernels whether they run on one thread (the contact pass then adds the
-        reactions itself; the same bits either way)."""
-        self.sys[itg.SCATTER] = 1.0 if get_threads() == 1 else 0.0
+        """Tell the kernels how many threads they run on (the contact pass cuts its rows
+        into as many parts; the same bits for any number)."""
+        self.sys[itg.PARTS] = float(get_threads())
 
     def _check(self, what: str):
         s = self.state
@@ -363,7 +363,7 @@ class Simulation:
         self.sys = sys
         done = 0
         try:
-            self.compute_forces()  # also sets sys[SCATTER]
+            self.compute_forces()  # also sets sys[PARTS]
             while True:
                 chunk = int(max_iter) - done if until is None else min(check_every,
                                                                        int(max_iter) - done)

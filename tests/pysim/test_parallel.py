@@ -223,14 +223,14 @@ def chunk_test_law(law, friction):
     return HERTZ, contact_params(1e5, 5.0, k_t=5e3, gamma_t=1.0, mu=mu, f_coh=3.0, d_coh=0.05)
 
 
-@pytest.mark.parametrize("scatter", [False, True])
+@pytest.mark.parametrize("parts", [1, 3])
 @pytest.mark.parametrize("law", ["hooke", "hertz_cohesive"])
 @pytest.mark.parametrize("friction", [False, True])
-def test_sphere_pass_equals_the_general_pass(rng, friction, law, scatter):
-    """The spheres-only loop (gather, SIMD laws, scatter, in chunks of listed pairs) gives
-    the general loop's forces, torques, reactions, springs, energy and virial, with the
-    reactions stored per pair or added at once, for the linear law and for Hertz with
-    cohesion (pairs in a cohesive gap); rows and blocks span several chunks."""
+def test_sphere_pass_equals_the_general_pass(rng, friction, law, parts):
+    """The spheres-only loop (gather, SIMD laws, scatter, in chunks of listed pairs, the
+    rows in one or three parts) gives the general loop's forces, torques, springs, energy
+    and virial, for the linear law and for Hertz with cohesion (pairs in a cohesive gap);
+    rows and blocks span several chunks."""
     from pysim.contacts import BLOCK, CAP, pair_pass, sphere_pass
     from pysim.neighbors import build_list
 
@@ -255,18 +255,18 @@ def test_sphere_pass_equals_the_general_pass(rng, friction, law, scatter):
         vir = np.zeros((3, 3))
         if kernel == "general":
             pe, nc = pair_pass(x, v, w, u, r, half, box, per, pj, istart, hist, law_id, p,
-                               friction, 1e-4, False, f, tq, fj, True, vir, 0.0, 0.0, scatter)
+                               friction, 1e-4, False, f, tq, fj, True, vir, 0.0, 0.0, True)
         else:
-            pe, nc = sphere_pass(x, v, w, r, box, per, pi, pj, istart, hist, law_id, p,
-                                 friction, 1e-4, f, tq, fj, True, vir, scatter)
-        out.append((f, tq, vir, hist, fj, pe, nc))
+            pe, nc = sphere_pass(x, v, w, r, box, per, pi, pj, istart, jstart, jk, hist,
+                                 law_id, p, friction, 1e-4, f, tq, fj, True, vir, parts)
+        out.append((f, tq, vir, hist, pe, nc))
     (a, b) = out
-    assert a[6] == b[6] > 100
+    assert a[5] == b[5] > 100
     # the general loop's normal forces leave rounding torques, of the forces' rounding
     atol = 1e-14 * max(1.0, np.abs(a[0]).max())
-    for k in range(5 if not scatter else 4):  # scatter: fj is neither read nor written
+    for k in range(4):
         np.testing.assert_allclose(a[k], b[k], rtol=1e-12, atol=atol)
-    assert a[5] == pytest.approx(b[5], rel=1e-14)
+    assert a[4] == pytest.approx(b[4], rel=1e-14)
     if law != "hooke":  # some pairs attract across a gap, without a tangential force
         g = np.linalg.norm(x[pj] - x[pi] - box * np.round((x[pj] - x[pi]) / box), axis=1)
         gap = (g > r[pi] + r[pj]) & (g < r[pi] + r[pj] + 0.05)
@@ -275,17 +275,35 @@ def test_sphere_pass_equals_the_general_pass(rng, friction, law, scatter):
             assert np.all(b[3][gap] == 0.0)
 
 
-def test_sphere_pass_is_the_same_bits_on_one_and_two_threads(rng):
-    """Chunks and threads do not change the sums: the sphere pass with reactions stored
-    per pair and gathered (threads) equals, bit for bit, the one-thread pass that adds
-    each reaction at once."""
-    from pysim.contacts import reduce_pass, sphere_pass
+def shared_particles(pi, jstart, jk, istart, parts):
+    """How many particles the contact passes treat as shared among ``parts`` parts (their
+    reactions come from rows of an earlier part), from :func:`part_bounds` directly."""
+    from pysim.contacts import BLOCK, part_bounds
+
+    n = len(istart) - 1
+    bounds = part_bounds(istart, (n + BLOCK - 1) // BLOCK, parts) * BLOCK
+    count = 0
+    for lo, hi in zip(bounds[:-1], bounds[1:]):
+        for i in range(lo, min(hi, n)):
+            count += jstart[i] < jstart[i + 1] and pi[jk[jstart[i]]] < lo
+    return count
+
+
+@pytest.mark.parametrize("order", ["random", "sorted"])
+def test_sphere_pass_is_the_same_bits_in_any_number_of_parts(rng, order):
+    """Parts (threads) do not change the sums: the sphere pass on its rows in 2, 3 or 7
+    parts, shared particles gathering their stored reactions, equals bit for bit the pass
+    in one part that adds every reaction at once, for particles in random order (most
+    are shared) and sorted by cell (few are); on the threads there are."""
+    from pysim.contacts import sphere_pass
     from pysim.forces import HOOKE, contact_params
-    from pysim.neighbors import build_list
+    from pysim.neighbors import build_list, spatial_order
 
     n = 500
     box = np.full(3, 8.0)
     x = rng.uniform(0, 8.0, (n, 3))
+    if order == "sorted":
+        x = x[spatial_order(x, box)]
     r = rng.uniform(0.4, 0.6, n)
     v = rng.normal(0, 1, (n, 3))
     w = rng.normal(0, 1, (n, 3))
@@ -293,19 +311,23 @@ def test_sphere_pass_is_the_same_bits_on_one_and_two_threads(rng):
                                             np.zeros(n), box, np.ones(3, bool), 0.3)
     p = contact_params(1e4, 5.0, k_t=5e3, gamma_t=1.0, mu=0.5)
     res = []
-    for scatter in (False, True):
+    for parts in (1, 2, 3, 7):
+        shared = shared_particles(pi, jstart, jk, istart, parts)
+        assert (shared == 0) if parts == 1 else (shared > 3)
+        if order == "random" and parts > 1:
+            assert shared > n // 4
         hist = np.tile([1e-4, -2e-4, 3e-4], (len(pj), 1))
-        f = np.zeros((n, 3))
-        tq = np.zeros((n, 3))
-        fj = np.zeros((len(pj), 6))
+        f = np.full((n, 3), np.nan)
+        tq = np.full((n, 3), np.nan)
+        fj = np.full((len(pj), 6), np.nan)
         vir = np.zeros((3, 3))
-        pe, nc = sphere_pass(x, v, w, r, box, np.ones(3, bool), pi, pj, istart, hist, HOOKE, p,
-                             True, 1e-4, f, tq, fj, True, vir, scatter)
-        reduce_pass(f, tq, jstart, jk, fj, v, w, np.ones(n), 0.0, 0.0, 0.0, 0.0, 0.0, False,
-                    scatter)
+        pe, nc = sphere_pass(x, v, w, r, box, np.ones(3, bool), pi, pj, istart, jstart, jk,
+                             hist, HOOKE, p, True, 1e-4, f, tq, fj, True, vir, parts)
         res.append((f, tq, hist, vir, pe, nc))
-    for a, b in zip(*res):
-        assert np.array_equal(a, b)
+    for other in res[1:]:
+        for a, b in zip(res[0], other):
+            assert np.array_equal(a, b)
+    assert np.isfinite(res[0][0]).all() and res[0][5] > 100
 
 
 def test_pairs_skipped_by_the_motion_bound_change_nothing(rng):
@@ -350,15 +372,16 @@ def test_pairs_skipped_by_the_motion_bound_change_nothing(rng):
     assert skipped > 1000
 
 
-@pytest.mark.parametrize("scatter", [False, True])
+@pytest.mark.parametrize("parts", [1, 3])
 @pytest.mark.parametrize("law", ["hooke", "hertz_cohesive"])
 @pytest.mark.parametrize("friction", [False, True])
-def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, scatter):
-    """The rods loop (gather, closest points and laws on SIMD lanes, sums in pair order)
-    gives the general loop's forces, torques, reactions, springs, energy, contacts and
-    virial bit for bit: rods of mixed lengths with spheres among them, 2-D-like parallel
-    pairs, pairs in a cohesive gap, pairs skipped by the motion bound, and rows and
-    blocks over several chunks."""
+def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, parts):
+    """The rods loop (gather, closest points and laws on SIMD lanes, sums in pair order,
+    the rows in one or three parts) gives the general loop's forces (with the reactions
+    stored per pair and gathered), torques, springs, energy, contacts and virial bit for
+    bit: rods of mixed lengths with spheres among them, 2-D-like parallel pairs, pairs in
+    a cohesive gap, pairs skipped by the motion bound, and rows and blocks over several
+    chunks."""
     from pysim.contacts import BLOCK, PAIR_SCRATCH, RCAP, SEP, rod_pass
     from pysim.neighbors import motion_bound, spine_separations
 
@@ -391,11 +414,14 @@ def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, scatt
         if kernel == "general":
             pe, nc = pair_pass(x, v, w, u, r, half, box, PER, pj, istart, h, law_id, p,
                                friction, 1e-4, True, f, tq, fj, True, vir, sigma, shrink,
-                               scatter)
+                               False)
+            reduce_pass(f, tq, jstart, jk, fj, v, w, np.ones(n), 0.0, 0.0, 0.0, 0.0, 0.0,
+                        False)
         else:
-            pe, nc = rod_pass(x, v, w, u, r, half, box, PER, pi, pj, istart, h, law_id, p,
-                              friction, 1e-4, f, tq, fj, True, vir, sigma, shrink, scatter)
-        out.append((f, tq, h, vir, fj if not scatter else fj[:, SEP:], pe, nc))
+            pe, nc = rod_pass(x, v, w, u, r, half, box, PER, pi, pj, istart, jstart, jk, h,
+                              law_id, p, friction, 1e-4, f, tq, fj, True, vir, sigma, shrink,
+                              parts)
+        out.append((f, tq, h, vir, fj[:, SEP:], pe, nc))
     a, b = out
     assert a[6] == b[6] > 100
     for k in range(5):
