@@ -11,7 +11,8 @@ same contact model and time step; :data:`MODEL`):
 * ``rods_a4``: spherocylinders ``L/D = 4`` at ``phi = 0.5`` with friction; LAMMPS runs them
   as rigid glued-sphere rods (9 spheres, spacing ``D/2``, :mod:`workflows.glued`).
 * ``scaling``: pysim alone, spheres and rods tiled from the dense states to ``N`` up to
-  10^6: seconds per step and peak memory.
+  10^6 and sorted by cell (as a large initial configuration is): seconds per step and
+  peak memory.
 
 Every timing is the engine's own loop time (LAMMPS/LIGGGHTS ``Loop time``; pysim the
 wall time of ``Simulation.run``), in a fresh process, engines alternating within each
@@ -82,15 +83,22 @@ def dense_rods(n: int, alpha: float, phi: float, seed: int = 1):
     return st.x.copy(), st.u.copy(), st.radius.copy(), st.length.copy(), st.box.copy()
 
 
-def tile(arrays, box, reps):
+def tile(arrays, box, reps, cell=1.0):
     """Periodic images: ``reps = (kx, ky, kz)`` copies of a periodic state; positions are
-    shifted, every other per-particle array repeated. Returns ``(arrays, box)``."""
+    shifted, every other per-particle array repeated, then all sorted by cells of edge
+    ``cell`` (:func:`pysim.neighbors.spatial_order`), as the dense states are: copy
+    after copy, neighbours across the faces of a copy would lie far apart in memory.
+    Returns ``(arrays, box)``."""
+    from pysim.neighbors import spatial_order
+
     x = arrays[0]
     shifts = np.array([[a, b, c] for a in range(reps[0]) for b in range(reps[1])
                        for c in range(reps[2])], dtype=np.float64) * box
     xs = (x[None, :, :] + shifts[:, None, :]).reshape(-1, 3)
     rest = [np.concatenate([a] * len(shifts)) for a in arrays[1:]]
-    return [xs] + rest, box * np.asarray(reps)
+    box = box * np.asarray(reps)
+    order = spatial_order(xs, box, cell)
+    return [xs[order]] + [a[order] for a in rest], box
 
 
 def reps_for(n_base: int, n_target: int):
@@ -318,8 +326,9 @@ def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, rep
             names = ["x", "radius"] + (["u", "length"] if kind == "rods" else [])
             for target in scaling:
                 reps = reps_for(len(d["x"]), target)
-                arrays, box = tile([d[k] for k in names], d["box"], reps)
-                path = work / f"scaling_{kind}_{len(arrays[0])}.npz"
+                arrays, box = tile([d[k] for k in names], d["box"], reps,
+                                   2.0 if kind == "rods" else 1.0)
+                path = work / f"scaling_{kind}_{len(arrays[0])}_sorted.npz"
                 if not path.exists():
                     np.savez(path, box=box, **dict(zip(names, arrays)))
                 n = len(arrays[0])

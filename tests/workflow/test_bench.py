@@ -29,6 +29,27 @@ def test_tiny_bench_writes_every_case(tmp_path):
     assert (tmp_path / "bench.png").stat().st_size > 1000
 
 
+def test_tiled_states_hold_every_image_sorted_by_cell(rng):
+    """Tiling copies every particle into each periodic image, with its other arrays, and
+    sorts the whole by cell, so that neighbours lie close in memory."""
+    from pysim.neighbors import spatial_order
+
+    box = np.array([3.0, 4.0, 5.0])
+    x = rng.uniform(0, 1, (50, 3)) * box
+    tag = np.arange(50.0)
+    (xs, ts), big = bench.tile([x, tag], box, (2, 1, 3))
+    np.testing.assert_array_equal(big, box * [2, 1, 3])
+    assert len(xs) == 300
+    np.testing.assert_array_equal(spatial_order(xs, big), np.arange(300))
+    # each particle's six images: its own position shifted by whole boxes
+    for k in (0, 17, 49):
+        images = xs[ts == k]
+        assert len(images) == 6
+        shifts = (images - x[k]) / box
+        np.testing.assert_allclose(shifts, np.round(shifts), atol=1e-12)
+        assert len({tuple(s) for s in np.round(shifts)}) == 6
+
+
 def test_glued_rods_have_nine_spheres_at_half_diameter_spacing(tmp_path):
     x = np.array([[1.0, 2.0, 3.0]])
     u = np.array([[0.0, 0.6, 0.8]])
