@@ -464,8 +464,7 @@ def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, 
     if friction or not solo:
         for q in range(mo):  # out of reach: no reaction, and the spring restarts
             k = ko[q]
-            j = pj[k]
-            if not solo and (j >= hp or shared[np.uint64(j)]):
+            if not solo and (pj[k] >= hp or shared[np.uint64(pj[k])]):
                 for c in range(FJ_COLUMNS):
                     fj[k, c] = 0.0
             if friction:
@@ -962,8 +961,7 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, fj, stats, bl
             hist[k, 0] = 0.0
             hist[k, 1] = 0.0
             hist[k, 2] = 0.0
-        j = pj[k]
-        if not solo and (j >= hp or shared[np.uint64(j)]):
+        if not solo and (pj[k] >= hp or shared[np.uint64(pj[k])]):
             for c in range(FJ_COLUMNS):
                 fj[k, c] = 0.0
     for m in range(mr):
