@@ -205,12 +205,14 @@ def _pysim_child(state: str, steps: int, friction: bool):
         st = State.spheres(d["x"], d["radius"], d["box"])
     sim = ps.Simulation(st, model, dt=m["dt"])
     sim.run(20)  # loads the compiled kernels, starts the thread pool
+    rebuilds = sim.rebuilds
     t0 = time.perf_counter()
     sim.run(steps)
     sec = time.perf_counter() - t0
     peak = _memory("VmHWM")
     print(json.dumps({"seconds": sec, "peak_rss": peak, "base_rss": base,
-                      "contacts": sim.thermo().n_contacts}))
+                      "contacts": sim.thermo().n_contacts,
+                      "rebuilds": sim.rebuilds - rebuilds}))
 
 
 # -- the benchmark ----------------------------------------------------------------------------
@@ -336,7 +338,7 @@ def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, rep
                 r = run_pysim(path, max(cores), nsteps, True)
                 add(f"scaling_{kind}", "pysim", max(cores), n, nsteps, r["seconds"],
                     bytes_per_particle=round((r["peak_rss"] - r["base_rss"]) / n),
-                    peak_mib=round(r["peak_rss"] / 2**20))
+                    peak_mib=round(r["peak_rss"] / 2**20), list_rebuilds=r["rebuilds"])
     out.parent.mkdir(parents=True, exist_ok=True)
     with open(out, "w", newline="") as fh:
         w = csv.DictWriter(fh, FIELDS, extrasaction="ignore")
