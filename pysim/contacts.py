@@ -53,7 +53,7 @@ import numpy as np
 from pysim.forces import (D_COH, END_BONDS, F_COH, GAMMA_N, GAMMA_T, HERTZ, HOOKE, K_N, K_T,
                           MU, cohesion_force, elastic_energy, normal_force, tangential_force)
 from pysim.geometry import closest_params, closest_select
-from pysim.jit import njit, pnjit, prange
+from pysim.jit import inline_njit, njit, pnjit, prange
 
 #: columns of a recorded contact: point (3), normal (3), overlap, force on i (3)
 REC_COLUMNS = 10
@@ -191,6 +191,28 @@ def block_totals(blk, virial):
     return tot[0], int(tot[1])
 
 
+@inline_njit
+def _reaction(k, j, solo, hp, shared, f, torque, fj, F0, F1, F2, u0, u1, u2):
+    """The reaction of pair ``k`` on its second particle ``j`` (force ``-F``, torque
+    ``u``): added to ``f_j`` at once in the ``solo`` part or when ``j`` is in this part
+    (below ``hp``) and not ``shared``, else stored in ``fj`` (:func:`_close_part`)."""
+    if solo or (j < hp and not shared[np.uint64(j)]):
+        ju = np.uint64(j)
+        f[ju, 0] -= F0
+        f[ju, 1] -= F1
+        f[ju, 2] -= F2
+        torque[ju, 0] += u0
+        torque[ju, 1] += u1
+        torque[ju, 2] += u2
+    else:
+        fj[k, 0] = -F0
+        fj[k, 1] = -F1
+        fj[k, 2] = -F2
+        fj[k, 3] = u0
+        fj[k, 4] = u1
+        fj[k, 5] = u2
+
+
 @njit
 def _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter):
     """Row ``i`` is complete: ``f_i = row sum + reaction sum`` with ``scatter`` (the
@@ -245,6 +267,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
     blk = np.zeros((nb if stats else 0, _STATS))
     if scatter:
         _zero(f, torque)
+    no_parts = np.empty(0, np.bool_)  # no shared particles (reactions: all or none stored)
     # with scatter one loop iteration holds every row, so the rows run in order on one
     # thread whatever the number of threads (a race otherwise)
     nt = 1 if scatter else nb
@@ -348,20 +371,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
                 q0 += t0
                 q1 += t1
                 q2 += t2
-                if scatter:
-                    f[j, 0] -= F0
-                    f[j, 1] -= F1
-                    f[j, 2] -= F2
-                    torque[j, 0] += r0
-                    torque[j, 1] += r1
-                    torque[j, 2] += r2
-                else:
-                    fj[k, 0] = -F0
-                    fj[k, 1] = -F1
-                    fj[k, 2] = -F2
-                    fj[k, 3] = r0
-                    fj[k, 4] = r1
-                    fj[k, 5] = r2
+                _reaction(k, j, scatter, 0, no_parts, f, torque, fj, F0, F1, F2, r0, r1, r2)
                 if stats:
                     blk[b, 0] += pe
                     blk[b, 1] += 1.0
@@ -621,22 +631,7 @@ def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torqu
         q0 += t0
         q1 += t1
         q2 += t2
-        j = pj[k]
-        if solo or (j < hp and not shared[np.uint64(j)]):
-            ju = np.uint64(j)
-            f[ju, 0] -= F0
-            f[ju, 1] -= F1
-            f[ju, 2] -= F2
-            torque[ju, 0] += u0
-            torque[ju, 1] += u1
-            torque[ju, 2] += u2
-        else:
-            fj[k, 0] = -F0
-            fj[k, 1] = -F1
-            fj[k, 2] = -F2
-            fj[k, 3] = u0
-            fj[k, 4] = u1
-            fj[k, 5] = u2
+        _reaction(k, pj[k], solo, hp, shared, f, torque, fj, F0, F1, F2, u0, u1, u2)
         if stats:
             delta = S[_DELTA * CAP + m]
             if delta > 0.0:
@@ -991,22 +986,7 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, fj, stats, bl
         q0 += R[_RT * RCAP + m]
         q1 += R[(_RT + 1) * RCAP + m]
         q2 += R[(_RT + 2) * RCAP + m]
-        j = pj[k]
-        if solo or (j < hp and not shared[np.uint64(j)]):
-            ju = np.uint64(j)
-            f[ju, 0] -= F0
-            f[ju, 1] -= F1
-            f[ju, 2] -= F2
-            torque[ju, 0] += r0
-            torque[ju, 1] += r1
-            torque[ju, 2] += r2
-        else:
-            fj[k, 0] = -F0
-            fj[k, 1] = -F1
-            fj[k, 2] = -F2
-            fj[k, 3] = r0
-            fj[k, 4] = r1
-            fj[k, 5] = r2
+        _reaction(k, pj[k], solo, hp, shared, f, torque, fj, F0, F1, F2, r0, r1, r2)
         if stats:
             blk[b, 0] += R[_RPE * RCAP + m]
             blk[b, 1] += 1.0
@@ -1148,26 +1128,34 @@ def _open_part(lo, hi, pi, jstart, jk, f, torque, shared):
 
 
 @njit
+def _reaction_sum(i, jstart, jk, fj):
+    """The stored reactions on particle ``i`` (force, torque), summed from zero in pair
+    order."""
+    g0 = 0.0
+    g1 = 0.0
+    g2 = 0.0
+    h0 = 0.0
+    h1 = 0.0
+    h2 = 0.0
+    for q in range(jstart[i], jstart[i + 1]):
+        k = jk[q]
+        g0 += fj[k, 0]
+        g1 += fj[k, 1]
+        g2 += fj[k, 2]
+        h0 += fj[k, 3]
+        h1 += fj[k, 4]
+        h2 += fj[k, 5]
+    return g0, g1, g2, h0, h1, h2
+
+
+@njit
 def _close_part(lo, hi, jstart, jk, fj, f, torque, shared):
-    """Complete the shared particles of rows ``lo:hi``: ``f_i = row sum + reaction sum``,
-    the reactions summed from zero in pair order (what :func:`reduce_pass` does)."""
+    """Complete the shared particles of rows ``lo:hi``: ``f_i = row sum + reaction sum``
+    (what :func:`reduce_pass` does)."""
     for i in range(lo, hi):
         if not shared[i]:
             continue
-        g0 = 0.0
-        g1 = 0.0
-        g2 = 0.0
-        h0 = 0.0
-        h1 = 0.0
-        h2 = 0.0
-        for q in range(jstart[i], jstart[i + 1]):
-            k = jk[q]
-            g0 += fj[k, 0]
-            g1 += fj[k, 1]
-            g2 += fj[k, 2]
-            h0 += fj[k, 3]
-            h1 += fj[k, 4]
-            h2 += fj[k, 5]
+        g0, g1, g2, h0, h1, h2 = _reaction_sum(i, jstart, jk, fj)
         f[i, 0] = f[i, 0] + g0
         f[i, 1] = f[i, 1] + g1
         f[i, 2] = f[i, 2] + g2
@@ -1192,20 +1180,7 @@ def reduce_pass(f, torque, jstart, jk, fj, v, omega, mass, gx, gy, gz, gamma_bg,
         q1 = torque[i, 1]
         q2 = torque[i, 2]
         if not gathered:
-            g0 = 0.0
-            g1 = 0.0
-            g2 = 0.0
-            h0 = 0.0
-            h1 = 0.0
-            h2 = 0.0
-            for q in range(jstart[i], jstart[i + 1]):
-                k = jk[q]
-                g0 += fj[k, 0]
-                g1 += fj[k, 1]
-                g2 += fj[k, 2]
-                h0 += fj[k, 3]
-                h1 += fj[k, 4]
-                h2 += fj[k, 5]
+            g0, g1, g2, h0, h1, h2 = _reaction_sum(i, jstart, jk, fj)
             s0 = s0 + g0
             s1 = s1 + g1
             s2 = s2 + g2
