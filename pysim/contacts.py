@@ -414,8 +414,8 @@ def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, 
     """Copy the listed pairs ``k0:k1`` within reach (``|d| < R_i + R_j + d_c``) into the
     scratch ``S``, one column each in pair order, ``kk`` their pair indices; zero the
     spring of every pair out of reach and, when its reaction is stored (not ``solo``, the
-    only part, and ``j`` at or past the part's end ``hp`` or ``shared``), its reaction (:func:`_sphere_scatter` writes
-    those of the pairs in reach). Two loops: the first
+    only part, and ``j`` at or past the part's end ``hp`` or ``shared``), its reaction
+    (:func:`_sphere_scatter` writes those of the pairs in reach). Two loops: the first
     takes the gap of every pair without branches on the pair (each is copied to the next
     free column, which only a pair in reach keeps; ``ko`` collects the others), the
     second copies velocities, spins and springs of the pairs in reach only. Returns the
@@ -593,8 +593,9 @@ def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torqu
     and ``q`` its partial force and torque sums; rows (of block ``b``, up to ``hi``) that
     end within the chunk are completed (:func:`_finish_row`). The reaction on ``j`` is
     added to ``f_j`` at once in the ``solo`` part or when ``j`` is in this part (below
-    ``hp``) and not ``shared``, else stored in ``fj`` (:func:`_close_part`). Adds the block's energy,
-    contacts and virial to ``blk[b]``. Returns the row and partial sums after the chunk."""
+    ``hp``) and not ``shared``, else stored in ``fj`` (:func:`_close_part`). Adds the
+    block's energy, contacts and virial to ``blk[b]``. Returns the row and partial sums
+    after the chunk."""
     for m in range(mc):
         k = kk[m]
         while istart[i + 1] <= k:
