@@ -10,9 +10,11 @@ loops call them:
 * :func:`pair_pass` + :func:`reduce_pass`, the force evaluation of every step, on any
   number of threads. ``pair_pass`` walks the rows of the pair list (particle ``i``
   owns its pairs ``(i, j > i)`` and their tangential springs ``hist``), sums the forces
-  and torques on ``i`` in row order and stores the reaction on ``j`` per pair (``fj``);
-  ``reduce_pass`` then adds to each particle ``p`` the reactions of the pairs in which
-  it is the second member, summed from zero in pair order, to the row sum. On one
+  and torques on ``i`` in row order and stores the reaction on ``j`` per pair (``fj``,
+  at the pair's place in the transposed list, so that the reactions on ``j`` lie
+  together in pair order); ``reduce_pass`` then adds to each particle ``p`` the
+  reactions of the pairs in which it is the second member, summed from zero in pair
+  order, to the row sum. On one
   thread (``scatter``) the rows run in order and the pass adds each reaction to the
   second particle at once: when row ``i`` is reached the reactions on ``i`` are
   complete, and ``f_i = row sum + reaction sum`` is the same sum in the same order, with
@@ -57,12 +59,15 @@ from pysim.jit import inline_njit, njit, pnjit, prange
 
 #: columns of a recorded contact: point (3), normal (3), overlap, force on i (3)
 REC_COLUMNS = 10
-#: columns of the per-pair reaction ``fj``: force on j (3), torque on j (3)
+#: components of the per-pair reaction ``fj``: force on j (3), torque on j (3). ``fj`` is
+#: stored one row per component, ``fj[c, k]`` for pair ``k``, so that a pass that uses
+#: only some components (the rods' separations, or the reactions of a few shared
+#: particles) touches only their memory pages: the pages never touched take no memory
 FJ_COLUMNS = 6
-#: the column of ``fj`` (when it has one) that holds the pair's spine distance at the last
+#: the row of ``fj`` (when it has one) that holds the pair's spine distance at the last
 #: list build (:func:`pysim.neighbors.spine_separations`), for skipping pairs out of reach
 SEP = 6
-#: columns of the per-pair scratch the integrators keep: the reaction and the separation
+#: rows of the per-pair scratch the integrators keep: the reaction and the separation
 PAIR_SCRATCH = 7
 #: rows per block of the parallel pair loop (fixed: results never depend on threads)
 BLOCK = 64
@@ -191,11 +196,41 @@ def block_totals(blk, virial):
     return tot[0], int(tot[1])
 
 
+@njit
+def _slot(k, j, jstart, jk):
+    """Where pair ``k`` stores its reaction on its second particle ``j``: its place ``q``
+    in the transposed list (``jk[q] = k``), so that the reactions on ``j`` lie together,
+    in pair order, in ``fj[:, jstart[j]:jstart[j+1]]`` (a search of ``j``'s few pairs)."""
+    q = jstart[j]
+    while jk[q] != k:
+        q += 1
+    return q
+
+
 @inline_njit
-def _reaction(k, j, solo, hp, shared, f, torque, fj, F0, F1, F2, u0, u1, u2):
-    """The reaction of pair ``k`` on its second particle ``j`` (force ``-F``, torque
-    ``u``): added to ``f_j`` at once in the ``solo`` part or when ``j`` is in this part
-    (below ``hp``) and not ``shared``, else stored in ``fj`` (:func:`_close_part`)."""
+def _store(q, fj, F0, F1, F2, u0, u1, u2):
+    """Store a reaction (force ``-F``, torque ``u``) in slot ``q`` of ``fj``."""
+    fj[0, q] = -F0
+    fj[1, q] = -F1
+    fj[2, q] = -F2
+    fj[3, q] = u0
+    fj[4, q] = u1
+    fj[5, q] = u2
+
+
+@inline_njit
+def _no_reaction(q, fj):
+    """A zero reaction in slot ``q`` of ``fj`` (a pair out of contact)."""
+    for c in range(FJ_COLUMNS):
+        fj[c, q] = 0.0
+
+
+@inline_njit
+def _reaction(j, solo, hp, shared, f, torque, F0, F1, F2, u0, u1, u2):
+    """The reaction of a pair on its second particle ``j`` (force ``-F``, torque ``u``):
+    added to ``f_j`` at once in the ``solo`` part or when ``j`` is in this part (below
+    ``hp``) and not ``shared`` (returns True); else it is left for :func:`_store_chunk`
+    (returns False)."""
     if solo or (j < hp and not shared[np.uint64(j)]):
         ju = np.uint64(j)
         f[ju, 0] -= F0
@@ -204,13 +239,31 @@ def _reaction(k, j, solo, hp, shared, f, torque, fj, F0, F1, F2, u0, u1, u2):
         torque[ju, 0] += u0
         torque[ju, 1] += u1
         torque[ju, 2] += u2
-    else:
-        fj[k, 0] = -F0
-        fj[k, 1] = -F1
-        fj[k, 2] = -F2
-        fj[k, 3] = u0
-        fj[k, 4] = u1
-        fj[k, 5] = u2
+        return True
+    return False
+
+
+@njit
+def _store_chunk(pj, jstart, jk, fj, X, cap, fo, uo, torques, kin, mi):
+    """Store in their slots (:func:`_slot`) the reactions that :func:`_reaction` left
+    out, for :func:`_close_part`: the pairs in reach of a chunk are ``kin[:mi]``, marked
+    ``-1 - k`` when left out; their force on i is in rows ``fo:fo+3`` of the chunk's
+    scratch ``X`` (``cap`` values per row) and, with ``torques``, their torque on j in
+    rows ``uo:uo+3``. The slots of pairs out of reach stay zero (:func:`_close_part`
+    leaves every slot it reads at zero)."""
+    for m in range(mi):
+        if kin[m] >= 0:
+            continue
+        k = -1 - kin[m]
+        u0 = 0.0
+        u1 = 0.0
+        u2 = 0.0
+        if torques:
+            u0 = X[uo * cap + m]
+            u1 = X[(uo + 1) * cap + m]
+            u2 = X[(uo + 2) * cap + m]
+        _store(_slot(k, pj[k], jstart, jk), fj, X[fo * cap + m], X[(fo + 1) * cap + m],
+               X[(fo + 2) * cap + m], u0, u1, u2)
 
 
 @njit
@@ -234,18 +287,19 @@ def _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter):
 
 
 @pnjit
-def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law, p,
-              friction, dt, rods, f, torque, fj, stats, virial, sep_sigma=0.0, sep_shrink=0.0,
-              scatter=False):
+def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, jk, hist, law,
+              p, friction, dt, rods, f, torque, fj, stats, virial, sep_sigma=0.0,
+              sep_shrink=0.0, scatter=False):
     """Forces and torques of every listed pair on its first particle, written to
     ``f``/``torque`` (overwritten: row sums), and the reaction on the second particle
-    stored per pair in ``fj`` (force, torque; zero out of contact) for
-    :func:`reduce_pass`. ``rods`` False skips the spine geometry (all spheres). With
-    ``stats`` also the virial ``virial[a, b] = sum (x_j - x_i)_a F_b`` (overwritten), and
-    returns ``(elastic energy, contacts)``; otherwise ``(0.0, 0)``. Contacts are the pairs
-    that carry a force: touching (``delta > 0``) or, with cohesion, closer than ``d_c``.
+    stored per pair in ``fj`` (force, torque; zero out of contact; at the pair's place in
+    the transposed list ``jstart``/``jk``, :func:`_slot`) for :func:`reduce_pass`.
+    ``rods`` False skips the spine geometry (all spheres). With ``stats`` also the virial
+    ``virial[a, b] = sum (x_j - x_i)_a F_b`` (overwritten), and returns ``(elastic
+    energy, contacts)``; otherwise ``(0.0, 0)``. Contacts are the pairs that carry a
+    force: touching (``delta > 0``) or, with cohesion, closer than ``d_c``.
 
-    With ``sep_sigma > 0`` and the separation column :data:`SEP` in ``fj``, a pair whose
+    With ``sep_sigma > 0`` and the separation row :data:`SEP` in ``fj``, a pair whose
     spine distance is bound to exceed its reach, ``sep_sigma g_ref - sep_shrink > R_i +
     R_j + d_c`` (:func:`pysim.neighbors.motion_bound`), is not evaluated: it would add
     nothing, so the results are the same bits, and listed rods that stay out of reach
@@ -260,7 +314,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
     fcoh, dcoh = p[F_COH], p[D_COH]
     b0, b1, b2 = box[0], box[1], box[2]
     p0, p1, p2 = periodic[0], periodic[1], periodic[2]
-    use_sep = sep_sigma > 0.0 and fj.shape[1] > SEP
+    use_sep = sep_sigma > 0.0 and fj.shape[0] > SEP
     ends = rods and p[END_BONDS] != 0.0
     nbond = 4 if ends else 1
     nb = (n + BLOCK - 1) // BLOCK
@@ -292,14 +346,13 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
                 rj = radius[j]
                 reach = ri + rj + dcoh
                 # out of reach by the motion bound (a margin far above rounding): no force
-                if use_sep and sep_sigma * fj[k, SEP] - sep_shrink > reach * (1.0 + 1e-9):
+                if use_sep and sep_sigma * fj[SEP, k] - sep_shrink > reach * (1.0 + 1e-9):
                     if friction:
                         hist[k, 0] = 0.0
                         hist[k, 1] = 0.0
                         hist[k, 2] = 0.0
                     if not scatter:
-                        for c in range(FJ_COLUMNS):
-                            fj[k, c] = 0.0
+                        _no_reaction(_slot(k, j, jstart, jk), fj)
                     continue
                 d0, d1, d2 = min_image(x[j, 0] - xi0, x[j, 1] - xi1, x[j, 2] - xi2, b0, b1, b2,
                                        p0, p1, p2)
@@ -362,8 +415,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
                         hist[k, 1] = 0.0
                         hist[k, 2] = 0.0
                     if not scatter:
-                        for c in range(FJ_COLUMNS):
-                            fj[k, c] = 0.0
+                        _no_reaction(_slot(k, j, jstart, jk), fj)
                     continue
                 s0 += F0
                 s1 += F1
@@ -371,7 +423,10 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law
                 q0 += t0
                 q1 += t1
                 q2 += t2
-                _reaction(k, j, scatter, 0, no_parts, f, torque, fj, F0, F1, F2, r0, r1, r2)
+                if scatter:
+                    _reaction(j, True, 0, no_parts, f, torque, F0, F1, F2, r0, r1, r2)
+                else:
+                    _store(_slot(k, j, jstart, jk), fj, F0, F1, F2, r0, r1, r2)
                 if stats:
                     blk[b, 0] += pe
                     blk[b, 1] += 1.0
@@ -410,16 +465,13 @@ PAD = 16
 
 @njit
 def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, hist, dcoh,
-                   friction, solo, hp, shared, fj, S, kk, ko):
+                   friction, S, kk, ko):
     """Copy the listed pairs ``k0:k1`` within reach (``|d| < R_i + R_j + d_c``) into the
     scratch ``S``, one column each in pair order, ``kk`` their pair indices; zero the
-    spring of every pair out of reach and, when its reaction is stored (not ``solo``, the
-    only part, and ``j`` at or past the part's end ``hp`` or ``shared``), its reaction
-    (:func:`_sphere_scatter` writes those of the pairs in reach). Two loops: the first
-    takes the gap of every pair without branches on the pair (each is copied to the next
-    free column, which only a pair in reach keeps; ``ko`` collects the others), the
-    second copies velocities, spins and springs of the pairs in reach only. Returns the
-    number of pairs in reach."""
+    spring of every pair out of reach. Two loops: the first takes the gap of every pair
+    without branches on the pair (each is copied to the next free column, which only a
+    pair in reach keeps; ``ko`` collects the others), the second copies velocities, spins
+    and springs of the pairs in reach only. Returns the number of pairs in reach."""
     hb0, hb1, hb2 = 0.5 * b0, 0.5 * b1, 0.5 * b2
     m = 0
     mo = 0
@@ -471,15 +523,11 @@ def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, 
                 S[(_WI + c) * CAP + q] = omega[i, c]
                 S[(_WJ + c) * CAP + q] = omega[j, c]
                 S[(_H + c) * CAP + q] = hist[k, c]
-    if friction or not solo:
-        for q in range(mo):  # out of reach: no reaction, and the spring restarts
+    if friction:
+        for q in range(mo):  # out of reach: the spring restarts
             k = ko[q]
-            if not solo and (pj[k] >= hp or shared[np.uint64(pj[k])]):
-                for c in range(FJ_COLUMNS):
-                    fj[k, c] = 0.0
-            if friction:
-                for c in range(3):
-                    hist[k, c] = 0.0
+            for c in range(3):
+                hist[k, c] = 0.0
     return m
 
 
@@ -586,15 +634,15 @@ def _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
 
 
 @njit
-def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, fj, stats,
-                    blk, b, S, kk, mc, solo, hp, shared, s0, s1, s2, q0, q1, q2):
+def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, stats, blk,
+                    b, S, kk, mc, solo, hp, shared, s0, s1, s2, q0, q1, q2):
     """Add the forces of the ``mc`` pairs in reach of the chunk ``k0:k1`` in pair order, as
     :func:`pair_pass` does, and store their springs. ``i`` is the row of pair ``k0``, ``s``
     and ``q`` its partial force and torque sums; rows (of block ``b``, up to ``hi``) that
     end within the chunk are completed (:func:`_finish_row`). The reaction on ``j`` is
     added to ``f_j`` at once in the ``solo`` part or when ``j`` is in this part (below
-    ``hp``) and not ``shared``, else stored in ``fj`` (:func:`_close_part`). Adds the
-    block's energy, contacts and virial to ``blk[b]``. Returns the row and partial sums
+    ``hp``) and not ``shared``, else stored after the chunk (:func:`_store_chunk`). Adds
+    the block's energy, contacts and virial to ``blk[b]``. Returns the row and partial sums
     after the chunk."""
     for m in range(mc):
         k = kk[m]
@@ -632,7 +680,8 @@ def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torqu
         q0 += t0
         q1 += t1
         q2 += t2
-        _reaction(k, pj[k], solo, hp, shared, f, torque, fj, F0, F1, F2, u0, u1, u2)
+        if not _reaction(pj[k], solo, hp, shared, f, torque, F0, F1, F2, u0, u1, u2):
+            kk[m] = -1 - k
         if stats:
             delta = S[_DELTA * CAP + m]
             if delta > 0.0:
@@ -679,10 +728,13 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, 
     thread). A part adds each reaction to its second particle at once, as
     :func:`pair_pass` does on one thread, unless that particle lies past the part or
     also receives reactions from an earlier part (``shared``): those reactions are
-    stored per pair and summed from zero in pair order after the parts
+    stored per pair (after each chunk, :func:`_store_chunk`, in the pair's slot,
+    :func:`_slot`) and summed from zero in pair order after the parts
     (:func:`_close_part`). Either way ``f_i = row sum + reaction sum`` in pair order, so
     any number of parts gives the same bits; with spatially sorted particles few are
-    shared, and the threads touch no more memory than one thread does.
+    shared, and the threads touch no more memory than one thread does. With more than
+    one part the slots of the shared particles in ``fj`` must hold zero on entry
+    (:func:`clear_slots`); they are left at zero.
 
     Each block of rows runs in chunks of at most ``CAP`` listed pairs, in three loops:
     :func:`_sphere_gather` copies the pairs in reach into a scratch, one column each,
@@ -720,19 +772,20 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, 
             while True:
                 k1 = min(k_end, k0 + CAP)
                 mc = _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1,
-                                    p2, hist, dcoh, friction, nt == 1, hp, shared, fj, S, kk,
-                                    ko)
+                                    p2, hist, dcoh, friction, S, kk, ko)
                 _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt)
                 i, s0, s1, s2, q0, q1, q2 = _sphere_scatter(
-                    k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, fj, stats,
-                    blk, b, S, kk, mc, nt == 1, hp, shared, s0, s1, s2, q0, q1, q2)
+                    k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, stats, blk,
+                    b, S, kk, mc, nt == 1, hp, shared, s0, s1, s2, q0, q1, q2)
+                if nt > 1:
+                    _store_chunk(pj, jstart, jk, fj, S, CAP, _F, _U, friction, kk, mc)
                 k0 = k1
                 if k0 >= k_end:
                     break
     if nt > 1:
         for t in prange(nt):
-            _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, jk, fj, f,
-                        torque, shared)
+            _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, fj, f, torque,
+                        shared)
     if stats:
         return block_totals(blk, virial)
     return 0.0, 0
@@ -770,7 +823,7 @@ def _rod_gather(k0, k1, pi, pj, x, u, radius, half, b0, b1, b2, p0, p1, p2, use_
         rj = radius[j]
         ri = radius[i]
         reach = ri + rj + dcoh
-        keep = not (use_sep and sep_sigma * fj[k, SEP] - sep_shrink > reach * (1.0 + 1e-9))
+        keep = not (use_sep and sep_sigma * fj[SEP, k] - sep_shrink > reach * (1.0 + 1e-9))
         d0, d1, d2 = min_image(x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2], b0,
                                b1, b2, p0, p1, p2)
         ka[m] = k
@@ -942,12 +995,11 @@ def _rod_laws(R, mr, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
 
 
 @njit
-def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, fj, stats, blk, b, R, kr,
-                 mr, kb, mo, solo, hp, shared, s0, s1, s2, q0, q1, q2):
+def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, stats, blk, b, R, kr, mr,
+                 kb, mo, solo, hp, shared, s0, s1, s2, q0, q1, q2):
     """As :func:`_sphere_scatter` for the pairs in reach of ``R``: row sums, reactions
-    (added to j, or stored in ``fj``), springs, and the block's energy, contacts and
-    virial; zero the spring and the stored reaction of the pairs ``kb`` out of reach.
-    Returns the
+    (added to j, or left to :func:`_store_chunk`), springs, and the block's energy,
+    contacts and virial; zero the spring of the pairs ``kb`` out of reach. Returns the
     row and partial sums after the chunk. Kept apart from :func:`_sphere_scatter`, not
     one function with the scratch layout as arguments: with runtime row offsets the
     sphere steps took 2-3 % longer (measured)."""
@@ -957,9 +1009,6 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, fj, stats, bl
             hist[k, 0] = 0.0
             hist[k, 1] = 0.0
             hist[k, 2] = 0.0
-        if not solo and (pj[k] >= hp or shared[np.uint64(pj[k])]):
-            for c in range(FJ_COLUMNS):
-                fj[k, c] = 0.0
     for m in range(mr):
         k = kr[m]
         while istart[i + 1] <= k:
@@ -987,7 +1036,8 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, fj, stats, bl
         q0 += R[_RT * RCAP + m]
         q1 += R[(_RT + 1) * RCAP + m]
         q2 += R[(_RT + 2) * RCAP + m]
-        _reaction(k, pj[k], solo, hp, shared, f, torque, fj, F0, F1, F2, r0, r1, r2)
+        if not _reaction(pj[k], solo, hp, shared, f, torque, F0, F1, F2, r0, r1, r2):
+            kr[m] = -1 - k
         if stats:
             blk[b, 0] += R[_RPE * RCAP + m]
             blk[b, 1] += 1.0
@@ -1032,7 +1082,7 @@ def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart
     fcoh, dcoh = p[F_COH], p[D_COH]
     b0, b1, b2 = box[0], box[1], box[2]
     p0, p1, p2 = periodic[0], periodic[1], periodic[2]
-    use_sep = sep_sigma > 0.0 and fj.shape[1] > SEP
+    use_sep = sep_sigma > 0.0 and fj.shape[0] > SEP
     nb = (n + BLOCK - 1) // BLOCK
     blk = np.zeros((nb if stats else 0, _STATS))
     nt = max(1, parts)
@@ -1067,15 +1117,17 @@ def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart
                                      friction, R, kr)
                 _rod_laws(R, mr, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt)
                 i, s0, s1, s2, q0, q1, q2 = _rod_scatter(
-                    k1, i, hi, pj, istart, hist, friction, f, torque, fj, stats, blk, b, R,
-                    kr, mr, kb, mo, nt == 1, hp, shared, s0, s1, s2, q0, q1, q2)
+                    k1, i, hi, pj, istart, hist, friction, f, torque, stats, blk, b, R, kr, mr,
+                    kb, mo, nt == 1, hp, shared, s0, s1, s2, q0, q1, q2)
+                if nt > 1:
+                    _store_chunk(pj, jstart, jk, fj, R, RCAP, _RF, _RU, True, kr, mr)
                 k0 = k1
                 if k0 >= k_end:
                     break
     if nt > 1:
         for t in prange(nt):
-            _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, jk, fj, f,
-                        torque, shared)
+            _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, fj, f, torque,
+                        shared)
     if stats:
         return block_totals(blk, virial)
     return 0.0, 0
@@ -1124,14 +1176,41 @@ def _open_part(lo, hi, pi, jstart, jk, f, torque, shared):
         shared[lo:hi] = False
         return
     for i in range(lo, hi):
-        q = jstart[i]
-        shared[i] = q < jstart[i + 1] and pi[jk[q]] < lo
+        shared[i] = _is_shared(i, lo, pi, jstart, jk)
+
+
+@inline_njit
+def _is_shared(i, lo, pi, jstart, jk):
+    """Particle ``i`` is the second member of a pair whose row lies before ``lo``."""
+    q = jstart[i]
+    return q < jstart[i + 1] and pi[jk[q]] < lo
 
 
 @njit
-def _reaction_sum(i, jstart, jk, fj):
+def clear_slots(pi, istart, jstart, jk, fj, parts):
+    """Zero the reaction slots (``fj[:FJ_COLUMNS]``) of the pairs of every particle that
+    :func:`sphere_pass` and :func:`rod_pass` on ``parts`` parts store reactions for (the
+    shared ones, :func:`_open_part`). The passes need these slots at zero on entry and
+    leave them so (:func:`_close_part`); after a list build they hold other pairs' values
+    or garbage, and a new number of parts shares other particles. Only those slots are
+    touched, so the memory of the others is never made resident."""
+    n = istart.shape[0] - 1
+    if parts < 2:
+        return
+    bounds = part_bounds(istart, (n + BLOCK - 1) // BLOCK, parts)
+    for t in range(1, parts):
+        lo = bounds[t] * BLOCK
+        for i in range(lo, min(n, bounds[t + 1] * BLOCK)):
+            if _is_shared(i, lo, pi, jstart, jk):
+                for q in range(jstart[i], jstart[i + 1]):
+                    for c in range(FJ_COLUMNS):
+                        fj[c, q] = 0.0
+
+
+@njit
+def _reaction_sum(i, jstart, fj):
     """The stored reactions on particle ``i`` (force, torque), summed from zero in pair
-    order."""
+    order (their slots, :func:`_slot`)."""
     g0 = 0.0
     g1 = 0.0
     g2 = 0.0
@@ -1139,24 +1218,27 @@ def _reaction_sum(i, jstart, jk, fj):
     h1 = 0.0
     h2 = 0.0
     for q in range(jstart[i], jstart[i + 1]):
-        k = jk[q]
-        g0 += fj[k, 0]
-        g1 += fj[k, 1]
-        g2 += fj[k, 2]
-        h0 += fj[k, 3]
-        h1 += fj[k, 4]
-        h2 += fj[k, 5]
+        g0 += fj[0, q]
+        g1 += fj[1, q]
+        g2 += fj[2, q]
+        h0 += fj[3, q]
+        h1 += fj[4, q]
+        h2 += fj[5, q]
     return g0, g1, g2, h0, h1, h2
 
 
 @njit
-def _close_part(lo, hi, jstart, jk, fj, f, torque, shared):
+def _close_part(lo, hi, jstart, fj, f, torque, shared):
     """Complete the shared particles of rows ``lo:hi``: ``f_i = row sum + reaction sum``
-    (what :func:`reduce_pass` does)."""
+    (what :func:`reduce_pass` does), and zero the slots read, so that the slots of pairs
+    out of reach hold zero at the next pass (:func:`_store_chunk`)."""
     for i in range(lo, hi):
         if not shared[i]:
             continue
-        g0, g1, g2, h0, h1, h2 = _reaction_sum(i, jstart, jk, fj)
+        g0, g1, g2, h0, h1, h2 = _reaction_sum(i, jstart, fj)
+        for q in range(jstart[i], jstart[i + 1]):
+            for c in range(FJ_COLUMNS):
+                fj[c, q] = 0.0
         f[i, 0] = f[i, 0] + g0
         f[i, 1] = f[i, 1] + g1
         f[i, 2] = f[i, 2] + g2
@@ -1166,7 +1248,7 @@ def _close_part(lo, hi, jstart, jk, fj, f, torque, shared):
 
 
 @pnjit
-def reduce_pass(f, torque, jstart, jk, fj, v, omega, mass, gx, gy, gz, gamma_bg, gamma_rot,
+def reduce_pass(f, torque, jstart, fj, v, omega, mass, gx, gy, gz, gamma_bg, gamma_rot,
                 body, gathered=False):
     """Complete each particle's force and torque: the row sums in ``f``/``torque`` plus the
     reactions of the pairs in which it is the second member (summed from zero in pair
@@ -1181,7 +1263,7 @@ def reduce_pass(f, torque, jstart, jk, fj, v, omega, mass, gx, gy, gz, gamma_bg,
         q1 = torque[i, 1]
         q2 = torque[i, 2]
         if not gathered:
-            g0, g1, g2, h0, h1, h2 = _reaction_sum(i, jstart, jk, fj)
+            g0, g1, g2, h0, h1, h2 = _reaction_sum(i, jstart, fj)
             s0 = s0 + g0
             s1 = s1 + g1
             s2 = s2 + g2

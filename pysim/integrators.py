@@ -37,7 +37,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pysim.contacts import PAIR_SCRATCH, SEP, pair_pass, reduce_pass, rod_pass, sphere_pass
+from pysim.contacts import (PAIR_SCRATCH, SEP, clear_slots, pair_pass, reduce_pass, rod_pass,
+                            sphere_pass)
 from pysim.forces import END_BONDS
 from pysim.jit import njit, pnjit, prange
 from pysim.neighbors import (build_list, motion_bound, spine_separations, stale_by_bound,
@@ -49,19 +50,22 @@ SQRT_HALF = np.sqrt(0.5)
 
 # indices into the 'sys' scalar array
 (GAMMA_BG, GAMMA_ROT, GX, GY, GZ, EPS_X, EPS_Y, EPS_Z, GROWTH, SKIN, RINT_BUILD, K_D,
- RC_BUILD, HALF_BUILD, RODS, DIM2, SEP_SIGMA, SEP_SHRINK, PARTS) = range(19)
-SYS_SIZE = 19
+ RC_BUILD, HALF_BUILD, RODS, DIM2, SEP_SIGMA, SEP_SHRINK, PARTS, SLOT_PARTS) = range(20)
+SYS_SIZE = 20
 
 #: The pair arrays, passed and returned in this order by the kernels: the Verlet list
 #: (:func:`pysim.neighbors.build_list`: ``pi``, ``pj``, ``istart``, ``jstart``, ``jk``),
 #: the tangential springs ``hist`` (npairs, 3; (npairs, 0) without friction) and the
-#: per-pair scratch ``fj`` (at least npairs rows: the reactions of
-#: :func:`pysim.contacts.pair_pass` and each pair's spine distance at the build, column
+#: per-pair scratch ``fj`` (:data:`pysim.contacts.PAIR_SCRATCH` rows of at least npairs
+#: values: the stored reactions of :func:`pysim.contacts.pair_pass` and of the threads'
+#: shared particles, and each pair's spine distance at the build, row
 #: :data:`pysim.contacts.SEP`). ``sys[SEP_SIGMA]``, ``sys[SEP_SHRINK]`` hold the motion
 #: bound since the build (:func:`pysim.neighbors.motion_bound`), set by
 #: :func:`maybe_rebuild`; ``SEP_SIGMA = 0`` turns the skipping of pairs out of reach off.
 #: ``sys[PARTS]``: the threads the kernels run on, the parts of the contact pass
-#: (:func:`forces`).
+#: (:func:`forces`); ``sys[SLOT_PARTS]``: the parts for which the reaction slots of the
+#: shared particles in ``fj`` hold zero (:func:`pysim.contacts.clear_slots`; 0 after a
+#: list build).
 PAIR_ARRAYS = ("pi", "pj", "istart", "jstart", "jk", "hist", "fj")
 
 
@@ -99,10 +103,10 @@ def rebuild(x, u, box, periodic, r_int, half, sys, old_istart, old_pj, old_hist,
     Returns the pair arrays (:data:`PAIR_ARRAYS`)."""
     pi, pj, istart, jstart, jk = build_list(x, u, r_int, half, box, periodic, sys[SKIN])
     hist = transfer_rows(old_istart, old_pj, old_hist, istart, pj)
-    if fj.shape[0] < pj.shape[0] or fj.shape[1] < PAIR_SCRATCH:  # scratch with 10 % to spare
-        fj = np.empty((pj.shape[0] + pj.shape[0] // 10 + 16, PAIR_SCRATCH))
+    if fj.shape[1] < pj.shape[0] or fj.shape[0] < PAIR_SCRATCH:  # scratch with 10 % to spare
+        fj = np.empty((PAIR_SCRATCH, pj.shape[0] + pj.shape[0] // 10 + 16))
     if sys[RODS] != 0.0:  # only the rod loop skips pairs by their separation
-        spine_separations(x, u, half, box, periodic, pi, pj, fj[:, SEP])
+        spine_separations(x, u, half, box, periodic, pi, pj, fj[SEP])
     x_ref[:, :] = x
     if u_ref.shape[0] == u.shape[0]:
         u_ref[:, :] = u
@@ -117,6 +121,7 @@ def rebuild(x, u, box, periodic, r_int, half, sys, old_istart, old_pj, old_hist,
     sys[HALF_BUILD] = hm
     sys[SEP_SIGMA] = 1.0
     sys[SEP_SHRINK] = 0.0
+    sys[SLOT_PARTS] = 0.0
     return pi, pj, istart, jstart, jk, hist, fj
 
 
@@ -162,11 +167,16 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, js
     # else reduce_pass adds the stored reactions. The same bits either way.
     parts = int(sys[PARTS])
     scatter = True
-    if sys[RODS] != 0.0 and cp[END_BONDS] != 0.0:
+    ends = sys[RODS] != 0.0 and cp[END_BONDS] != 0.0
+    if not ends and parts > 1 and sys[SLOT_PARTS] != parts:
+        clear_slots(pi, istart, jstart, jk, fj, parts)
+        sys[SLOT_PARTS] = parts
+    if ends:
         scatter = parts == 1
-        pe, nc = pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, hist, law,
-                           cp, friction, dt, True, f, torque, fj, stats, virial, sys[SEP_SIGMA],
-                           sys[SEP_SHRINK], scatter)
+        pe, nc = pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, jk,
+                           hist, law, cp, friction, dt, True, f, torque, fj, stats, virial,
+                           sys[SEP_SIGMA], sys[SEP_SHRINK], scatter)
+        sys[SLOT_PARTS] = 0.0  # it wrote every slot
     elif sys[RODS] != 0.0:
         pe, nc = rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart,
                           jk, hist, law, cp, friction, dt, f, torque, fj, stats, virial,
@@ -180,7 +190,7 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, js
     body = gx != 0.0 or gy != 0.0 or gz != 0.0 or gb != 0.0 or gr != 0.0
     walls = planes.shape[0] + cyls.shape[0] > 0
     if not scatter or (body and not walls):
-        reduce_pass(f, torque, jstart, jk, fj, v, omega, mass, gx, gy, gz, gb, gr,
+        reduce_pass(f, torque, jstart, fj, v, omega, mass, gx, gy, gz, gb, gr,
                     body and not walls, scatter)
     nw = 0
     if walls:

@@ -243,7 +243,7 @@ class Simulation:
         self.pj = np.ascontiguousarray(self.pj, dtype=np.int32)
         self._istart = row_starts(self.pi, n)
         self._jstart, self._jk = transpose(self.pj, n)
-        self._fj = np.zeros((len(self.pi), PAIR_SCRATCH))  # separations 0: nothing skipped
+        self._fj = np.zeros((PAIR_SCRATCH, len(self.pi)))  # separations 0: nothing skipped
 
     def _rebuild(self):
         s = self.state

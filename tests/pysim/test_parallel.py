@@ -25,10 +25,10 @@ def threaded(x, u, r, half, v, w, box, p, friction, hist=None, skin=0.3):
     f = np.empty((n, 3))
     tq = np.empty((n, 3))
     vir = np.zeros((3, 3))
-    fj = np.empty((len(pi), FJ_COLUMNS))
-    pe, nc = pair_pass(x, v, w, u, r, half, box, PER, pj, istart, hist, HOOKE, p, friction,
-                       1e-4, bool(np.any(half > 0)), f, tq, fj, True, vir)
-    reduce_pass(f, tq, jstart, jk, fj, v, w, np.ones(n), 0.0, 0.0, 0.0, 0.0, 0.0, False)
+    fj = np.empty((FJ_COLUMNS, len(pi)))
+    pe, nc = pair_pass(x, v, w, u, r, half, box, PER, pj, istart, jstart, jk, hist, HOOKE, p,
+                       friction, 1e-4, bool(np.any(half > 0)), f, tq, fj, True, vir)
+    reduce_pass(f, tq, jstart, fj, v, w, np.ones(n), 0.0, 0.0, 0.0, 0.0, 0.0, False)
     return f, tq, vir, pe, nc, (pi, pj, hist)
 
 
@@ -231,7 +231,7 @@ def test_sphere_pass_equals_the_general_pass(rng, friction, law, parts):
     rows in one or three parts) gives the general loop's forces, torques, springs, energy
     and virial, for the linear law and for Hertz with cohesion (pairs in a cohesive gap);
     rows and blocks span several chunks."""
-    from pysim.contacts import BLOCK, CAP, pair_pass, sphere_pass
+    from pysim.contacts import BLOCK, CAP, clear_slots, pair_pass, sphere_pass
     from pysim.neighbors import build_list
 
     n = 300
@@ -251,14 +251,17 @@ def test_sphere_pass_equals_the_general_pass(rng, friction, law, parts):
         hist = np.tile([1e-4, -2e-4, 3e-4], (len(pj), 1)) if friction else np.zeros((len(pj), 0))
         f = np.zeros((n, 3))
         tq = np.zeros((n, 3))
-        fj = np.ones((len(pj), 6))
+        fj = np.full((6, len(pj)), np.nan)  # the general pass writes every slot
         vir = np.zeros((3, 3))
         if kernel == "general":
-            pe, nc = pair_pass(x, v, w, u, r, half, box, per, pj, istart, hist, law_id, p,
-                               friction, 1e-4, False, f, tq, fj, True, vir, 0.0, 0.0, True)
+            pe, nc = pair_pass(x, v, w, u, r, half, box, per, pj, istart, jstart, jk, hist,
+                               law_id, p, friction, 1e-4, False, f, tq, fj, True, vir, 0.0, 0.0,
+                               True)
         else:
+            clear_slots(pi, istart, jstart, jk, fj, parts)
             pe, nc = sphere_pass(x, v, w, r, box, per, pi, pj, istart, jstart, jk, hist,
                                  law_id, p, friction, 1e-4, f, tq, fj, True, vir, parts)
+            assert np.all(np.isnan(fj) | (fj == 0.0))  # slots read are left at zero
         out.append((f, tq, vir, hist, pe, nc))
     (a, b) = out
     assert a[5] == b[5] > 100
@@ -295,7 +298,7 @@ def test_sphere_pass_is_the_same_bits_in_any_number_of_parts(rng, order):
     parts, shared particles gathering their stored reactions, equals bit for bit the pass
     in one part that adds every reaction at once, for particles in random order (most
     are shared) and sorted by cell (few are); on the threads there are."""
-    from pysim.contacts import sphere_pass
+    from pysim.contacts import clear_slots, sphere_pass
     from pysim.forces import HOOKE, contact_params
     from pysim.neighbors import build_list, spatial_order
 
@@ -319,10 +322,13 @@ def test_sphere_pass_is_the_same_bits_in_any_number_of_parts(rng, order):
         hist = np.tile([1e-4, -2e-4, 3e-4], (len(pj), 1))
         f = np.full((n, 3), np.nan)
         tq = np.full((n, 3), np.nan)
-        fj = np.full((len(pj), 6), np.nan)
+        fj = np.full((6, len(pj)), np.nan)  # only the shared particles' slots are read
+        clear_slots(pi, istart, jstart, jk, fj, parts)
+        assert (np.sum(fj[0] == 0.0) == 0) if parts == 1 else np.sum(fj[0] == 0.0) > 3
         vir = np.zeros((3, 3))
         pe, nc = sphere_pass(x, v, w, r, box, np.ones(3, bool), pi, pj, istart, jstart, jk,
                              hist, HOOKE, p, True, 1e-4, f, tq, fj, True, vir, parts)
+        assert np.all(np.isnan(fj) | (fj == 0.0))  # and left at zero
         res.append((f, tq, hist, vir, pe, nc))
     for other in res[1:]:
         for a, b in zip(res[0], other):
@@ -341,8 +347,8 @@ def test_pairs_skipped_by_the_motion_bound_change_nothing(rng):
     x, u, r, length, box = random_spherocylinders(np.full(n, 0.5), rng.uniform(0, 3, n), 0.3, 3)
     half = length / 2
     pi, pj, istart, jstart, jk = build_list(x, u, r + half, half, box, PER, 0.4)
-    scratch = np.zeros((len(pi), PAIR_SCRATCH))
-    spine_separations(x, u, half, box, PER, pi, pj, scratch[:, SEP])
+    scratch = np.zeros((PAIR_SCRATCH, len(pi)))
+    spine_separations(x, u, half, box, PER, pi, pj, scratch[SEP])
     x_ref, u_ref, box_ref = x.copy(), u.copy(), box.copy()
     p = contact_params(1e4, 5.0, k_t=5e3, gamma_t=1.0, mu=0.5)
     skipped = 0
@@ -360,14 +366,14 @@ def test_pairs_skipped_by_the_motion_bound_change_nothing(rng):
         for bound in ((0.0, 0.0), (sigma, shrink)):
             f, tq, vir = np.empty((n, 3)), np.empty((n, 3)), np.zeros((3, 3))
             fj = scratch.copy()
-            fj[:, :SEP] = np.nan
+            fj[:SEP] = np.nan
             h = hist.copy()
-            pair_pass(x, v, w, u, r, half, box, PER, pj, istart, h, HOOKE, p, True, 1e-4, True,
-                      f, tq, fj, True, vir, *bound)
-            out.append((f, tq, fj[:, :SEP], h, vir))
+            pair_pass(x, v, w, u, r, half, box, PER, pj, istart, jstart, jk, h, HOOKE, p, True,
+                      1e-4, True, f, tq, fj, True, vir, *bound)
+            out.append((f, tq, fj[:SEP], h, vir))
         for a, b in zip(*out):
             np.testing.assert_array_equal(a, b)
-        gap = sigma * scratch[:, SEP] - shrink - (r[pi] + r[pj])
+        gap = sigma * scratch[SEP] - shrink - (r[pi] + r[pj])
         skipped += int(np.sum(gap > 1e-9))
     assert skipped > 1000
 
@@ -382,7 +388,7 @@ def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, parts
     bit: rods of mixed lengths with spheres among them, 2-D-like parallel pairs, pairs in
     a cohesive gap, pairs skipped by the motion bound, and rows and blocks over several
     chunks."""
-    from pysim.contacts import BLOCK, PAIR_SCRATCH, RCAP, SEP, rod_pass
+    from pysim.contacts import BLOCK, PAIR_SCRATCH, RCAP, SEP, clear_slots, rod_pass
     from pysim.neighbors import motion_bound, spine_separations
 
     n = 400
@@ -393,8 +399,8 @@ def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, parts
     half = length / 2
     pi, pj, istart, jstart, jk = build_list(x, u, r + half, half, box, PER, 0.4)
     assert istart[BLOCK] > RCAP  # the first block runs in more than one chunk
-    scratch = np.zeros((len(pi), PAIR_SCRATCH))
-    spine_separations(x, u, half, box, PER, pi, pj, scratch[:, SEP])
+    scratch = np.zeros((PAIR_SCRATCH, len(pi)))
+    spine_separations(x, u, half, box, PER, pi, pj, scratch[SEP])
     x_ref, u_ref, box_ref = x.copy(), u.copy(), box.copy()
     box = box * np.exp(-0.02)  # compress into contact
     x = (x * np.exp(-0.02) + rng.normal(0, 0.01, x.shape)) % box
@@ -409,23 +415,25 @@ def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, parts
     for kernel in ("general", "rods"):
         f, tq, vir = np.ones((n, 3)), np.ones((n, 3)), np.zeros((3, 3))
         fj = scratch.copy()
-        fj[:, :SEP] = np.nan
+        fj[:SEP] = np.nan
         h = hist0.copy()
         if kernel == "general":
-            pe, nc = pair_pass(x, v, w, u, r, half, box, PER, pj, istart, h, law_id, p,
+            pe, nc = pair_pass(x, v, w, u, r, half, box, PER, pj, istart, jstart, jk, h, law_id, p,
                                friction, 1e-4, True, f, tq, fj, True, vir, sigma, shrink,
                                False)
-            reduce_pass(f, tq, jstart, jk, fj, v, w, np.ones(n), 0.0, 0.0, 0.0, 0.0, 0.0,
+            reduce_pass(f, tq, jstart, fj, v, w, np.ones(n), 0.0, 0.0, 0.0, 0.0, 0.0,
                         False)
         else:
+            clear_slots(pi, istart, jstart, jk, fj, parts)
             pe, nc = rod_pass(x, v, w, u, r, half, box, PER, pi, pj, istart, jstart, jk, h,
                               law_id, p, friction, 1e-4, f, tq, fj, True, vir, sigma, shrink,
                               parts)
-        out.append((f, tq, h, vir, fj[:, SEP:], pe, nc))
+            assert np.all(np.isnan(fj[:SEP]) | (fj[:SEP] == 0.0))
+        out.append((f, tq, h, vir, fj[SEP:], pe, nc))
     a, b = out
     assert a[6] == b[6] > 100
     for k in range(5):
         assert np.array_equal(a[k], b[k], equal_nan=True), k
     assert a[5] == b[5]
-    skipped = sigma * scratch[:, SEP] - shrink > r[pi] + r[pj] + p[6] * 1.000000001
+    skipped = sigma * scratch[SEP] - shrink > r[pi] + r[pj] + p[6] * 1.000000001
     assert skipped.sum() > 10
