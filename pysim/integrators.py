@@ -420,6 +420,12 @@ def _half_and_half(x, v, q, u, omega, f, torque, mass, inertia, radius, half, r_
         x[i, 2] = wrap1(x2, b2) if p2 else x2
 
 
+#: pairs from which :func:`verlet_chunk` returns to its caller after a list rebuild, to
+#: free the old list: a return costs a Python call of the kernel (tens of microseconds),
+#: a list of this size about 3 MB (rods) and a step of it a millisecond or more
+RETURN_PAIRS = 1 << 15
+
+
 @njit
 def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia, box,
                  periodic, pi, pj, istart, jstart, jk, hist, fj, x_ref, u_ref, box_ref, law, cp,
@@ -431,8 +437,11 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
     ``t_seg + (step0 + k + 1 - s_seg) dt``, a function of the step number alone, so that
     results do not depend on how a run is cut into calls (restarts are bit-identical).
     ``f``/``torque`` must hold the forces of the current state on entry and hold those of
-    the final state on exit (the virial too). Returns ``(pair arrays (7), elastic energy,
-    pair contacts, wall contacts, rebuilds)``.
+    the final state on exit (the virial too). With a list of at least
+    :data:`RETURN_PAIRS` pairs it returns after the step that rebuilds the list, so that
+    the caller drops the old list before the next rebuild (a call that rebuilt twice
+    would hold three lists at once). Returns ``(pair arrays (7), elastic energy, pair
+    contacts, wall contacts, rebuilds, steps done)``.
     """
     h = 0.5 * dt
     pe = 0.0
@@ -452,6 +461,7 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
     # mass grows with the volume (area in 2-D), inertia with mass times length squared
     sc3 = sc * sc if dim2 else sc * sc * sc
     sc5 = sc3 * sc * sc
+    done = nsteps
     for k in range(nsteps):
         t = clock[0] + (clock[2] + k + 1 - clock[1]) * dt
         if k == 0:
@@ -463,17 +473,21 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
         pi, pj, istart, jstart, jk, hist, fj, rebuilt = maybe_rebuild(
             x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,
             u_ref, box_ref)
+        last = (rebuilt and pj.shape[0] >= RETURN_PAIRS) or k == nsteps - 1
         if rebuilt:
             rebuilds += 1
         pe, nc, nw = forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart,
                             jstart, jk, hist, fj, law, cp, friction, planes, cyls, wp, wfriction,
-                            whist, wall_force, sys, t, dt, f, torque, virial, k == nsteps - 1)
+                            whist, wall_force, sys, t, dt, f, torque, virial, last)
         for kk in range(3):
             box[kk] *= scale[kk]
+        if last:
+            done = k + 1
+            break
     if nsteps > 0:
         _second_half(x, v, omega, u, f, torque, mass, inertia, radius, half, r_int, h, scale,
                      deform, sc, sc3, sc5)
-    return pi, pj, istart, jstart, jk, hist, fj, pe, nc, nw, rebuilds
+    return pi, pj, istart, jstart, jk, hist, fj, pe, nc, nw, rebuilds, done
 
 
 @njit

@@ -301,17 +301,20 @@ class Simulation:
         self.sys[itg.EPS_X:itg.EPS_Z + 1] = rate
         self.sys[itg.GROWTH] = growth_rate
         self._sync_threads()
-        (*pairs, self._pe, self._nc, self._nw, nreb) = itg.verlet_chunk(
-            s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half, self.r_int,
-            s.mass, s.inertia, s.box, s.periodic, *self._pairs(), self.x_ref, self.u_ref,
-            self.box_ref, self.model.law_id, self._cp, self.model.friction, self.planes,
-            self.cyls, self._wp, self._wfriction, self.whist, self.wall_force, self.sys,
-            self._clock(), self.dt, int(nsteps), self.virial)
-        self._set_pairs(pairs)
-        self.rebuilds += nreb
+        left = int(nsteps)
+        while left > 0:  # a call returns after a list rebuild: the old list is freed here
+            (*pairs, self._pe, self._nc, self._nw, nreb, done) = itg.verlet_chunk(
+                s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half,
+                self.r_int, s.mass, s.inertia, s.box, s.periodic, *self._pairs(), self.x_ref,
+                self.u_ref, self.box_ref, self.model.law_id, self._cp, self.model.friction,
+                self.planes, self.cyls, self._wp, self._wfriction, self.whist,
+                self.wall_force, self.sys, self._clock(), self.dt, left, self.virial)
+            self._set_pairs(pairs)
+            self.rebuilds += nreb
+            self._advance_clock(done)
+            left -= done
         if growth_rate:
             s.length[:] = 2.0 * self.half
-        self._advance_clock(nsteps)
         self._check("velocity Verlet")
 
     def run_overdamped(self, nsteps: int, k_d: float, kappa: float = 0.0):
