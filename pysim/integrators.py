@@ -421,9 +421,9 @@ def _half_and_half(x, v, q, u, omega, f, torque, mass, inertia, radius, half, r_
 
 
 #: pairs from which :func:`verlet_chunk` returns to its caller after a list rebuild, to
-#: free the old list: a return costs a Python call of the kernel (tens of microseconds),
-#: a list of this size about 3 MB (rods) and a step of it a millisecond or more
-RETURN_PAIRS = 1 << 15
+#: free the old list: a return costs a Python call of the kernel (about 30 µs), a step
+#: with a list of this size 0.1 ms or more, and lists rebuild every tens of steps
+RETURN_PAIRS = 1 << 13
 
 
 @njit
