@@ -30,6 +30,11 @@ from pysim.jit import njit, pnjit, prange
 
 #: particles per block of the parallel loops (fixed: results never depend on threads)
 BLOCK = 256
+#: room per particle for its row in the list build's single pass (more: a second pass);
+#: a rebuild gives 1.5 times the last list's mean row instead
+ROW_ROOM = 16
+#: cells per list range for rods (spheres: 1); finer cells visit fewer candidates
+CELLS_PER_RANGE = 2
 
 
 @njit
@@ -76,100 +81,162 @@ def _grid(x, box, periodic, cell_min):
 
 
 @njit
-def _shift_range(nc, periodic_axis):
-    """Cell offsets ``lo..hi`` along one axis that visit each neighbour cell once."""
-    if periodic_axis:
-        if nc >= 3:
-            return -1, 1
-        return 0, nc - 1
-    return -1, 1
+def _stencil(nc, periodic_axis, k):
+    """Cell offsets ``lo..hi`` along one axis for cells ``1/k`` of the range wide, and
+    whether they form a stencil (``-k..k``; else every cell once, when a periodic axis
+    has fewer than ``2k + 1`` cells)."""
+    if periodic_axis and nc < 2 * k + 1:
+        return 0, nc - 1, False
+    return -k, k, True
 
 
 @njit
-def _rows(lo, hi, x, u, r_int, half, box, periodic, skin, rods, nc, cell_of, start, members,
-          counts, pi, pj, istart, fill):
-    """Rows ``lo..hi-1`` of the list: neighbours ``j > i`` of each particle ``i`` whose
-    spines are closer than ``r_c_i + r_c_j + skin``. Without ``fill`` their number goes to
-    ``counts[i + 1]``; with it they are written, sorted, to ``pj[istart[i]:]``."""
-    lox, hix = _shift_range(nc[0], periodic[0])
-    loy, hiy = _shift_range(nc[1], periodic[1])
-    loz, hiz = _shift_range(nc[2], periodic[2])
-    for i in range(lo, hi):
-        c = cell_of[i]
+def _image(d, b, hb, periodic_axis, stencil):
+    """Minimum image of one separation component (``hb = b/2``). On a
+    stencil axis the separation lies within ``1.5 b`` and one shift suffices; for pairs
+    in range it is the shift of ``d - b floor(d/b + 1/2)`` (the same bits)."""
+    if not periodic_axis:
+        return d
+    if stencil:
+        if d > hb:
+            return d - b
+        if d < -hb:
+            return d + b
+        return d
+    return d - b * np.floor(d / b + 0.5)
+
+
+@njit
+def _wrap_cell(c, nc):
+    """``c mod nc`` for ``-nc <= c < 2 nc`` without an integer division."""
+    if c < 0:
+        return c + nc
+    if c >= nc:
+        return c - nc
+    return c
+
+
+@njit
+def _off_spine(d0, d1, d2, u0, u1, u2, h, reach):
+    """Whether the point ``d`` (relative to a spine's centre) is at least ``reach`` from
+    the spine of half-length ``h`` along ``u``: then a spine of half-length ``h_j``
+    through ``d`` is at least ``reach - h_j`` from it (a cheap test before
+    :func:`closest_params`)."""
+    s = min(max(d0 * u0 + d1 * u1 + d2 * u2, -h), h)
+    e0 = d0 - s * u0
+    e1 = d1 - s * u1
+    e2 = d2 - s * u2
+    return e0 * e0 + e1 * e1 + e2 * e2 >= reach * reach
+
+
+@njit
+def _cell_rows(c0, c1, x, u, r_int, half, box, periodic, skin, rods, nc, k, start, members,
+               counts, pj, istart, fill):
+    """The rows of the particles in cells ``c0..c1-1``: neighbours ``j > i`` of each
+    particle ``i`` whose spines are closer than ``r_c_i + r_c_j + skin``. Cells are at
+    least ``1/k`` of the largest range wide. Each row is written sorted by ``j``. With ``fill`` row ``i``
+    goes to ``pj[istart[i]:]``. Without it ``pj`` is the build's buffer and ``istart``
+    its room by cell (cell ``c`` from ``istart[c]``): the rows go one after the other as
+    far as the room of cells ``c0..c1-1`` holds them, the row lengths to ``counts[i +
+    1]``; returns whether they all fitted."""
+    lox, hix, stx = _stencil(nc[0], periodic[0], k)
+    loy, hiy, sty = _stencil(nc[1], periodic[1], k)
+    loz, hiz, stz = _stencil(nc[2], periodic[2], k)
+    b0, b1, b2 = box[0], box[1], box[2]
+    h0, h1, h2 = 0.5 * b0, 0.5 * b1, 0.5 * b2
+    near = np.empty((hix - lox + 1) * (hiy - loy + 1) * (hiz - loz + 1), np.int64)
+    at = istart[c0] if not fill else 0  # next free place in the buffer
+    room = istart[c1] if not fill else pj.shape[0]
+    for c in range(c0, c1):
+        if start[c] == start[c + 1]:
+            continue
         cz = c % nc[2]
         cy = (c // nc[2]) % nc[1]
         cx = c // (nc[1] * nc[2])
-        a = istart[i] if fill else 0
-        m = 0
-        xi0, xi1, xi2 = x[i, 0], x[i, 1], x[i, 2]
-        ri = r_int[i]
-        hi_ = half[i]
+        ns = 0  # the cells of the stencil around c
         for ax in range(lox, hix + 1):
             ccx = cx + ax
             if periodic[0]:
-                ccx %= nc[0]
+                ccx = _wrap_cell(ccx, nc[0])
             elif ccx < 0 or ccx >= nc[0]:
                 continue
             for ay in range(loy, hiy + 1):
                 ccy = cy + ay
                 if periodic[1]:
-                    ccy %= nc[1]
+                    ccy = _wrap_cell(ccy, nc[1])
                 elif ccy < 0 or ccy >= nc[1]:
                     continue
                 for az in range(loz, hiz + 1):
                     ccz = cz + az
                     if periodic[2]:
-                        ccz %= nc[2]
+                        ccz = _wrap_cell(ccz, nc[2])
                     elif ccz < 0 or ccz >= nc[2]:
                         continue
                     cc = (ccx * nc[1] + ccy) * nc[2] + ccz
-                    for q in range(start[cc], start[cc + 1]):
-                        j = members[q]
-                        if j <= i:
+                    if start[cc] < start[cc + 1]:
+                        near[ns] = cc
+                        ns += 1
+        for qi in range(start[c], start[c + 1]):
+            i = members[qi]
+            a = istart[i] if fill else at
+            m = 0
+            xi0, xi1, xi2, ri = x[i, 0], x[i, 1], x[i, 2], r_int[i]
+            hi_ = half[i]
+            for e in range(ns):
+                cc = near[e]
+                for q in range(start[cc + 1] - 1, start[cc] - 1, -1):
+                    j = members[q]
+                    if j <= i:  # members ascend within a cell
+                        break
+                    d0 = _image(x[j, 0] - xi0, b0, h0, periodic[0], stx)
+                    d1 = _image(x[j, 1] - xi1, b1, h1, periodic[1], sty)
+                    d2 = _image(x[j, 2] - xi2, b2, h2, periodic[2], stz)
+                    rj = r_int[j]
+                    rc = ri + rj + skin
+                    if d0 * d0 + d1 * d1 + d2 * d2 >= rc * rc:
+                        continue
+                    hj = half[j]
+                    if rods and (hi_ > 0.0 or hj > 0.0):
+                        rs = ri - hi_ + rj - hj + skin
+                        if _off_spine(d0, d1, d2, u[i, 0], u[i, 1], u[i, 2], hi_, rs + hj):
                             continue
-                        d0 = x[j, 0] - xi0
-                        d1 = x[j, 1] - xi1
-                        d2 = x[j, 2] - xi2
-                        if periodic[0]:
-                            d0 -= box[0] * np.floor(d0 / box[0] + 0.5)
-                        if periodic[1]:
-                            d1 -= box[1] * np.floor(d1 / box[1] + 0.5)
-                        if periodic[2]:
-                            d2 -= box[2] * np.floor(d2 / box[2] + 0.5)
-                        rc = ri + r_int[j] + skin
-                        if d0 * d0 + d1 * d1 + d2 * d2 >= rc * rc:
+                        if _off_spine(-d0, -d1, -d2, u[j, 0], u[j, 1], u[j, 2], hj, rs + hi_):
                             continue
-                        hj = half[j]
-                        if rods and (hi_ > 0.0 or hj > 0.0):
-                            s, t = closest_params(-d0, -d1, -d2, u[i, 0], u[i, 1], u[i, 2], hi_,
-                                                  u[j, 0], u[j, 1], u[j, 2], hj)
-                            g0 = d0 + t * u[j, 0] - s * u[i, 0]
-                            g1 = d1 + t * u[j, 1] - s * u[i, 1]
-                            g2 = d2 + t * u[j, 2] - s * u[i, 2]
-                            rs = ri - hi_ + r_int[j] - hj + skin
-                            if g0 * g0 + g1 * g1 + g2 * g2 >= rs * rs:
-                                continue
-                        if fill:
-                            pj[a + m] = j
-                        m += 1
-        if fill:
-            for q in range(a, a + m):  # insertion sort of the row by j
-                v = pj[q]
-                r = q - 1
-                while r >= a and pj[r] > v:
-                    pj[r + 1] = pj[r]
-                    r -= 1
-                pj[r + 1] = v
-                pi[q] = i
-        else:
-            counts[i + 1] = m
+                        s, t = closest_params(-d0, -d1, -d2, u[i, 0], u[i, 1], u[i, 2], hi_,
+                                              u[j, 0], u[j, 1], u[j, 2], hj)
+                        g0 = d0 + t * u[j, 0] - s * u[i, 0]
+                        g1 = d1 + t * u[j, 1] - s * u[i, 1]
+                        g2 = d2 + t * u[j, 2] - s * u[i, 2]
+                        if g0 * g0 + g1 * g1 + g2 * g2 >= rs * rs:
+                            continue
+                    if a + m < room:
+                        pj[a + m] = j
+                    m += 1
+            if a + m <= room:
+                for q in range(a, a + m):  # insertion sort of the row by j
+                    v = pj[q]
+                    r = q - 1
+                    while r >= a and pj[r] > v:
+                        pj[r + 1] = pj[r]
+                        r -= 1
+                    pj[r + 1] = v
+            if not fill:
+                counts[i + 1] = m
+                at += m
+    return at <= room
 
 
 @pnjit
-def build_list(x, u, r_int, half, box, periodic, skin):
+def build_list(x, u, r_int, half, box, periodic, skin, row_room=ROW_ROOM, scratch=None):
     """Verlet pairs ``i < j`` whose spines are closer than ``r_c_i + r_c_j + skin``
-    (``r_c = r_int - half``). Returns ``(pi, pj, istart, jstart, jk)`` (see the module
-    doc): pairs as int32, sorted by ``pi`` then ``pj``."""
+    (``r_c = r_int - half``); positions on periodic axes in ``[0, box)``. Returns ``(pi,
+    pj, istart, jstart, jk)`` (see the module doc): pairs as int32, sorted by ``pi`` then
+    ``pj``.
+
+    One pass over cells ``1/k`` of the largest range wide (``k`` =
+    :data:`CELLS_PER_RANGE` for rods, 1 for spheres) writes each task's rows to a buffer
+    with ``row_room`` places per particle (``scratch``, an int32 array, where it is large
+    enough); tasks whose rows do not fit are computed again into the list."""
     n = x.shape[0]
     rmax = 0.0
     rods = False
@@ -178,13 +245,21 @@ def build_list(x, u, r_int, half, box, periodic, skin):
             rmax = r_int[i]
         if half[i] > 0.0:
             rods = True
-    nc, cell_of, start, members = _grid(x, box, periodic, 2.0 * rmax + skin)
+    k = CELLS_PER_RANGE if rods else 1
+    nc, cell_of, start, members = _grid(x, box, periodic, (2.0 * rmax + skin) / k)
     counts = np.zeros(n + 1, np.int64)
-    nb = (n + BLOCK - 1) // BLOCK
-    none = np.empty(0, np.int32)
+    ncell = start.shape[0] - 1
+    cb = max(1, BLOCK * ncell // max(n, 1))  # cells per task: about BLOCK particles
+    nb = (ncell + cb - 1) // cb
+    room = start * max(1, row_room)
+    if scratch is not None and scratch.shape[0] >= room[ncell]:
+        buf = scratch[:room[ncell]]
+    else:
+        buf = np.empty(room[ncell], np.int32)
+    fitted = np.empty(nb, np.bool_)
     for b in prange(nb):
-        _rows(b * BLOCK, min(n, (b + 1) * BLOCK), x, u, r_int, half, box, periodic, skin, rods,
-              nc, cell_of, start, members, counts, none, none, counts, False)
+        fitted[b] = _cell_rows(b * cb, min(ncell, (b + 1) * cb), x, u, r_int, half, box, periodic,
+                               skin, rods, nc, k, start, members, counts, buf, room, False)
     for i in range(n):
         counts[i + 1] += counts[i]
     istart = counts
@@ -192,8 +267,22 @@ def build_list(x, u, r_int, half, box, periodic, skin):
     pi = np.empty(npair, np.int32)
     pj = np.empty(npair, np.int32)
     for b in prange(nb):
-        _rows(b * BLOCK, min(n, (b + 1) * BLOCK), x, u, r_int, half, box, periodic, skin, rods,
-              nc, cell_of, start, members, counts, pi, pj, istart, True)
+        c0 = b * cb
+        c1 = min(ncell, c0 + cb)
+        if fitted[b]:
+            at = room[c0]
+            for q in range(start[c0], start[c1]):
+                i = members[q]
+                for e in range(istart[i], istart[i + 1]):
+                    pj[e] = buf[at]
+                    at += 1
+        else:
+            _cell_rows(c0, c1, x, u, r_int, half, box, periodic, skin, rods, nc, k, start,
+                       members, counts, pj, istart, True)
+    for b in prange((n + BLOCK - 1) // BLOCK):
+        for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
+            for e in range(istart[i], istart[i + 1]):
+                pi[e] = i
     jstart, jk = transpose(pj, n)
     return pi, pj, istart, jstart, jk
 

@@ -81,6 +81,60 @@ def test_rod_list_holds_every_pair_within_reach(rng):
                    for q in range(len(x)))
 
 
+def brute_force_list(x, u, r, half, box, periodic, skin):
+    """Pairs ``i < j`` whose spines are closer than ``r_i + r_j + skin``, one by one."""
+    want = []
+    for i in range(len(x)):
+        for j in range(i + 1, len(x)):
+            d = x[j] - x[i]
+            for k in range(3):
+                if periodic[k]:
+                    d[k] -= box[k] * np.round(d[k] / box[k])
+            if segment_distance(np.zeros(3), u[i], half[i], d, u[j], half[j]) < r[i] + r[j] + skin:
+                want.append((i, j))
+    return want
+
+
+@pytest.mark.parametrize("side, periodic, dim", [
+    (14.0, (True, True, True), 3),  # 5 cells of half the range: a stencil on every axis
+    (11.0, (True, True, True), 3),  # 4 cells: every cell once on every axis
+    (14.0, (False, False, False), 3),
+    (14.0, (True, False, True), 3),
+    (17.0, (True, True, False), 2),
+])
+def test_rod_list_in_boxes_of_every_kind(rng, side, periodic, dim):
+    """build_list against brute force with rods and spheres, periodic and walled axes
+    (with particles outside the walls), 3-D and 2-D."""
+    box = np.array([side, side, side if dim == 3 else 0.0])
+    per = np.array(periodic)
+    x, u, r, half, *_ = random_rods(rng, 260 if dim == 3 else 120, np.where(box > 0, box, 1.0),
+                                    4.0, dim)
+    walled = ~per & (box > 0)
+    x[:10, walled] += 0.6 * side  # above the upper walls
+    x[10:20, walled] -= 0.6 * side  # below the lower ones
+    pi, pj, istart, jstart, jk = build_list(x, u, r + half, half, box, per, 0.3)
+    want = brute_force_list(x, u, r, half, box, per, 0.3)
+    got = list(zip(pi.tolist(), pj.tolist()))
+    assert got == want and len(want) > 100
+    np.testing.assert_array_equal(np.diff(istart), np.bincount(pi, minlength=len(x)))
+
+
+def test_sphere_list_with_long_rows(rng):
+    """Rows longer than the build's room per particle (a large skin): the build's second
+    pass writes them, and the list is the brute-force one."""
+    from pysim.neighbors import ROW_ROOM
+
+    box = np.full(3, 9.0)
+    n = 300
+    x = rng.uniform(0, 9.0, (n, 3))
+    r = rng.uniform(0.3, 0.6, n)
+    r[0] = 2.5  # one large sphere
+    pi, pj, istart, *_ = build_list(x, np.zeros((n, 3)), r, np.zeros(n), box, PER, 2.5)
+    ai, aj = all_pairs(x, r, box, PER, 2.5)
+    assert list(zip(pi.tolist(), pj.tolist())) == list(zip(ai.tolist(), aj.tolist()))
+    assert len(pi) > ROW_ROOM * n  # the room per particle was too small
+
+
 def test_list_is_stale_never_misses_a_rod_contact(rng):
     """Rods translating, rotating and compressed: whenever the list is said to be good,
     every pair in contact range is in it."""
