@@ -134,8 +134,9 @@ def _cell_rows(c0, c1, x, u, r_int, half, box, periodic, skin, rods, nc, k, star
                counts, pj, istart, fill):
     """The rows of the particles in cells ``c0..c1-1``: neighbours ``j > i`` of each
     particle ``i`` whose spines are closer than ``r_c_i + r_c_j + skin``. Cells are at
-    least ``1/k`` of the largest range wide. Each row is written sorted by ``j``. With ``fill`` row ``i``
-    goes to ``pj[istart[i]:]``. Without it ``pj`` is the build's buffer and ``istart``
+    least ``1/k`` of the largest range wide; the stencil's cells along ``z`` are one range
+    of ``members``, and the enclosing-sphere test runs on them without branches. Each
+    row is written sorted by ``j``. With ``fill`` row ``i`` goes to ``pj[istart[i]:]``. Without it ``pj`` is the build's buffer and ``istart``
     its room by cell (cell ``c`` from ``istart[c]``): the rows go one after the other as
     far as the room of cells ``c0..c1-1`` holds them, the row lengths to ``counts[i +
     1]``; returns whether they all fitted."""
@@ -144,7 +145,10 @@ def _cell_rows(c0, c1, x, u, r_int, half, box, periodic, skin, rods, nc, k, star
     loz, hiz, stz = _stencil(nc[2], periodic[2], k)
     b0, b1, b2 = box[0], box[1], box[2]
     h0, h1, h2 = 0.5 * b0, 0.5 * b1, 0.5 * b2
-    near = np.empty((hix - lox + 1) * (hiy - loy + 1) * (hiz - loz + 1), np.int64)
+    nseg = 2 * (hix - lox + 1) * (hiy - loy + 1)  # member ranges: columns of cells along z
+    seg_lo = np.empty(nseg, np.int64)
+    seg_hi = np.empty(nseg, np.int64)
+    cand = np.empty(64, np.int32)
     at = istart[c0] if not fill else 0  # next free place in the buffer
     room = istart[c1] if not fill else pj.shape[0]
     for c in range(c0, c1):
@@ -153,7 +157,8 @@ def _cell_rows(c0, c1, x, u, r_int, half, box, periodic, skin, rods, nc, k, star
         cz = c % nc[2]
         cy = (c // nc[2]) % nc[1]
         cx = c // (nc[1] * nc[2])
-        ns = 0  # the cells of the stencil around c
+        ns = 0
+        tot = 0
         for ax in range(lox, hix + 1):
             ccx = cx + ax
             if periodic[0]:
@@ -166,52 +171,70 @@ def _cell_rows(c0, c1, x, u, r_int, half, box, periodic, skin, rods, nc, k, star
                     ccy = _wrap_cell(ccy, nc[1])
                 elif ccy < 0 or ccy >= nc[1]:
                     continue
-                for az in range(loz, hiz + 1):
-                    ccz = cz + az
-                    if periodic[2]:
-                        ccz = _wrap_cell(ccz, nc[2])
-                    elif ccz < 0 or ccz >= nc[2]:
-                        continue
-                    cc = (ccx * nc[1] + ccy) * nc[2] + ccz
-                    if start[cc] < start[cc + 1]:
-                        near[ns] = cc
-                        ns += 1
+                col = (ccx * nc[1] + ccy) * nc[2]
+                z0 = cz + loz
+                z1 = cz + hiz
+                if not stz:  # every cell of the column once
+                    z0, z1 = 0, nc[2] - 1
+                elif not periodic[2]:
+                    z0 = max(z0, 0)
+                    z1 = min(z1, nc[2] - 1)
+                elif z0 < 0:
+                    seg_lo[ns] = start[col + z0 + nc[2]]
+                    seg_hi[ns] = start[col + nc[2]]
+                    tot += seg_hi[ns] - seg_lo[ns]
+                    ns += 1
+                    z0 = 0
+                elif z1 >= nc[2]:
+                    seg_lo[ns] = start[col]
+                    seg_hi[ns] = start[col + z1 - nc[2] + 1]
+                    tot += seg_hi[ns] - seg_lo[ns]
+                    ns += 1
+                    z1 = nc[2] - 1
+                seg_lo[ns] = start[col + z0]
+                seg_hi[ns] = start[col + z1 + 1]
+                tot += seg_hi[ns] - seg_lo[ns]
+                ns += 1
+        if cand.shape[0] < tot:
+            cand = np.empty(2 * tot, np.int32)
         for qi in range(start[c], start[c + 1]):
             i = members[qi]
             a = istart[i] if fill else at
-            m = 0
             xi0, xi1, xi2, ri = x[i, 0], x[i, 1], x[i, 2], r_int[i]
             hi_ = half[i]
+            nk = 0  # candidates j > i within the enclosing spheres' range, without branches
             for e in range(ns):
-                cc = near[e]
-                for q in range(start[cc + 1] - 1, start[cc] - 1, -1):
+                for q in range(seg_lo[e], seg_hi[e]):
                     j = members[q]
-                    if j <= i:  # members ascend within a cell
-                        break
                     d0 = _image(x[j, 0] - xi0, b0, h0, periodic[0], stx)
                     d1 = _image(x[j, 1] - xi1, b1, h1, periodic[1], sty)
                     d2 = _image(x[j, 2] - xi2, b2, h2, periodic[2], stz)
-                    rj = r_int[j]
-                    rc = ri + rj + skin
-                    if d0 * d0 + d1 * d1 + d2 * d2 >= rc * rc:
+                    rc = ri + r_int[j] + skin
+                    cand[nk] = j
+                    nk += (j > i) & (d0 * d0 + d1 * d1 + d2 * d2 < rc * rc)
+            m = 0
+            for e in range(nk):
+                j = cand[e]
+                hj = half[j]
+                if rods and (hi_ > 0.0 or hj > 0.0):
+                    d0 = _image(x[j, 0] - xi0, b0, h0, periodic[0], stx)
+                    d1 = _image(x[j, 1] - xi1, b1, h1, periodic[1], sty)
+                    d2 = _image(x[j, 2] - xi2, b2, h2, periodic[2], stz)
+                    rs = ri - hi_ + r_int[j] - hj + skin
+                    if _off_spine(d0, d1, d2, u[i, 0], u[i, 1], u[i, 2], hi_, rs + hj):
                         continue
-                    hj = half[j]
-                    if rods and (hi_ > 0.0 or hj > 0.0):
-                        rs = ri - hi_ + rj - hj + skin
-                        if _off_spine(d0, d1, d2, u[i, 0], u[i, 1], u[i, 2], hi_, rs + hj):
-                            continue
-                        if _off_spine(-d0, -d1, -d2, u[j, 0], u[j, 1], u[j, 2], hj, rs + hi_):
-                            continue
-                        s, t = closest_params(-d0, -d1, -d2, u[i, 0], u[i, 1], u[i, 2], hi_,
-                                              u[j, 0], u[j, 1], u[j, 2], hj)
-                        g0 = d0 + t * u[j, 0] - s * u[i, 0]
-                        g1 = d1 + t * u[j, 1] - s * u[i, 1]
-                        g2 = d2 + t * u[j, 2] - s * u[i, 2]
-                        if g0 * g0 + g1 * g1 + g2 * g2 >= rs * rs:
-                            continue
-                    if a + m < room:
-                        pj[a + m] = j
-                    m += 1
+                    if _off_spine(-d0, -d1, -d2, u[j, 0], u[j, 1], u[j, 2], hj, rs + hi_):
+                        continue
+                    s, t = closest_params(-d0, -d1, -d2, u[i, 0], u[i, 1], u[i, 2], hi_,
+                                          u[j, 0], u[j, 1], u[j, 2], hj)
+                    g0 = d0 + t * u[j, 0] - s * u[i, 0]
+                    g1 = d1 + t * u[j, 1] - s * u[i, 1]
+                    g2 = d2 + t * u[j, 2] - s * u[i, 2]
+                    if g0 * g0 + g1 * g1 + g2 * g2 >= rs * rs:
+                        continue
+                if a + m < room:
+                    pj[a + m] = j
+                m += 1
             if a + m <= room:
                 for q in range(a, a + m):  # insertion sort of the row by j
                     v = pj[q]
