@@ -30,8 +30,8 @@ from pysim.jit import njit, pnjit, prange
 
 #: particles per block of the parallel loops (fixed: results never depend on threads)
 BLOCK = 256
-#: room per particle for its row in the list build's single pass (more: a second pass);
-#: a rebuild gives 1.5 times the last list's mean row instead
+#: places per particle in the list build's buffer of pairs (a build whose pairs do not fit
+#: runs again with the room they need); a rebuild gives 1.5 times the last list's mean row
 ROW_ROOM = 16
 #: cells per list range for rods (spheres: 1); finer cells visit fewer candidates
 CELLS_PER_RANGE = 2
@@ -130,16 +130,15 @@ def _off_spine(d0, d1, d2, u0, u1, u2, h, reach):
 
 
 @njit
-def _cell_rows(c0, c1, x, u, r_int, half, box, periodic, skin, rods, nc, k, start, members,
-               counts, pj, istart, fill):
-    """The rows of the particles in cells ``c0..c1-1``: neighbours ``j > i`` of each
-    particle ``i`` whose spines are closer than ``r_c_i + r_c_j + skin``. Cells are at
-    least ``1/k`` of the largest range wide; the stencil's cells along ``z`` are one range
-    of ``members``, and the enclosing-sphere test runs on them without branches. Each
-    row is written sorted by ``j``. With ``fill`` row ``i`` goes to ``pj[istart[i]:]``. Without it ``pj`` is the build's buffer and ``istart``
-    its room by cell (cell ``c`` from ``istart[c]``): the rows go one after the other as
-    far as the room of cells ``c0..c1-1`` holds them, the row lengths to ``counts[i +
-    1]``; returns whether they all fitted."""
+def _forward_pairs(c0, c1, x, u, r_int, half, box, periodic, skin, rods, nc, k, start,
+                   members, found, buf, lo, hi):
+    """The partners of the particles in cells ``c0..c1-1`` that come later in cell
+    order (member position ``q > qi``) and whose spines are closer than ``r_c_i + r_c_j +
+    skin``: each pair once. Cells are at least ``1/k`` of the largest range wide; the
+    stencil's cells along ``z`` are one range of ``members``, and the enclosing-sphere
+    test runs on them without branches. The partners of the particle at member position
+    ``qi`` go to ``buf`` one after the other from ``lo`` (as far as ``hi``), their
+    number to ``found[qi]``. Returns how many places they needed."""
     lox, hix, stx = _stencil(nc[0], periodic[0], k)
     loy, hiy, sty = _stencil(nc[1], periodic[1], k)
     loz, hiz, stz = _stencil(nc[2], periodic[2], k)
@@ -149,8 +148,7 @@ def _cell_rows(c0, c1, x, u, r_int, half, box, periodic, skin, rods, nc, k, star
     seg_lo = np.empty(nseg, np.int64)
     seg_hi = np.empty(nseg, np.int64)
     cand = np.empty(64, np.int32)
-    at = istart[c0] if not fill else 0  # next free place in the buffer
-    room = istart[c1] if not fill else pj.shape[0]
+    at = lo
     for c in range(c0, c1):
         if start[c] == start[c + 1]:
             continue
@@ -172,6 +170,8 @@ def _cell_rows(c0, c1, x, u, r_int, half, box, periodic, skin, rods, nc, k, star
                 elif ccy < 0 or ccy >= nc[1]:
                     continue
                 col = (ccx * nc[1] + ccy) * nc[2]
+                if col + nc[2] <= c:  # the whole column comes before c
+                    continue
                 z0 = cz + loz
                 z1 = cz + hiz
                 if not stz:  # every cell of the column once
@@ -199,19 +199,18 @@ def _cell_rows(c0, c1, x, u, r_int, half, box, periodic, skin, rods, nc, k, star
             cand = np.empty(2 * tot, np.int32)
         for qi in range(start[c], start[c + 1]):
             i = members[qi]
-            a = istart[i] if fill else at
             xi0, xi1, xi2, ri = x[i, 0], x[i, 1], x[i, 2], r_int[i]
             hi_ = half[i]
-            nk = 0  # candidates j > i within the enclosing spheres' range, without branches
+            nk = 0  # later particles within the enclosing spheres' range, without branches
             for e in range(ns):
-                for q in range(seg_lo[e], seg_hi[e]):
+                for q in range(max(seg_lo[e], qi + 1), seg_hi[e]):
                     j = members[q]
                     d0 = _image(x[j, 0] - xi0, b0, h0, periodic[0], stx)
                     d1 = _image(x[j, 1] - xi1, b1, h1, periodic[1], sty)
                     d2 = _image(x[j, 2] - xi2, b2, h2, periodic[2], stz)
                     rc = ri + r_int[j] + skin
                     cand[nk] = j
-                    nk += (j > i) & (d0 * d0 + d1 * d1 + d2 * d2 < rc * rc)
+                    nk += d0 * d0 + d1 * d1 + d2 * d2 < rc * rc
             m = 0
             for e in range(nk):
                 j = cand[e]
@@ -232,21 +231,12 @@ def _cell_rows(c0, c1, x, u, r_int, half, box, periodic, skin, rods, nc, k, star
                     g2 = d2 + t * u[j, 2] - s * u[i, 2]
                     if g0 * g0 + g1 * g1 + g2 * g2 >= rs * rs:
                         continue
-                if a + m < room:
-                    pj[a + m] = j
+                if at + m < hi:
+                    buf[at + m] = j
                 m += 1
-            if a + m <= room:
-                for q in range(a, a + m):  # insertion sort of the row by j
-                    v = pj[q]
-                    r = q - 1
-                    while r >= a and pj[r] > v:
-                        pj[r + 1] = pj[r]
-                        r -= 1
-                    pj[r + 1] = v
-            if not fill:
-                counts[i + 1] = m
-                at += m
-    return at <= room
+            found[qi] = m
+            at += m
+    return at - lo
 
 
 @pnjit
@@ -256,10 +246,12 @@ def build_list(x, u, r_int, half, box, periodic, skin, row_room=ROW_ROOM, scratc
     pj, istart, jstart, jk)`` (see the module doc): pairs as int32, sorted by ``pi`` then
     ``pj``.
 
-    One pass over cells ``1/k`` of the largest range wide (``k`` =
-    :data:`CELLS_PER_RANGE` for rods, 1 for spheres) writes each task's rows to a buffer
-    with ``row_room`` places per particle (``scratch``, an int32 array, where it is large
-    enough); tasks whose rows do not fit are computed again into the list."""
+    Cells ``1/k`` of the largest range wide (``k`` = :data:`CELLS_PER_RANGE` for rods, 1
+    for spheres); each particle looks for the partners that come later in cell order
+    (:func:`_forward_pairs`, one task per group of cells, into a buffer with
+    ``row_room`` places per particle: ``scratch``, an int32 array, where it is large
+    enough; if a task's pairs do not fit, all tasks run again with the room they
+    needed). A counting sort puts each pair in the row of its lower index."""
     n = x.shape[0]
     rmax = 0.0
     rods = False
@@ -270,42 +262,67 @@ def build_list(x, u, r_int, half, box, periodic, skin, row_room=ROW_ROOM, scratc
             rods = True
     k = CELLS_PER_RANGE if rods else 1
     nc, cell_of, start, members = _grid(x, box, periodic, (2.0 * rmax + skin) / k)
-    counts = np.zeros(n + 1, np.int64)
     ncell = start.shape[0] - 1
     cb = max(1, BLOCK * ncell // max(n, 1))  # cells per task: about BLOCK particles
     nb = (ncell + cb - 1) // cb
-    room = start * max(1, row_room)
-    if scratch is not None and scratch.shape[0] >= room[ncell]:
-        buf = scratch[:room[ncell]]
+    lo = np.empty(nb + 1, np.int64)
+    for b in range(nb + 1):
+        lo[b] = start[min(ncell, b * cb)] * max(1, row_room)
+    if scratch is not None and scratch.shape[0] >= lo[nb]:
+        buf = scratch[:lo[nb]]
     else:
-        buf = np.empty(room[ncell], np.int32)
-    fitted = np.empty(nb, np.bool_)
+        buf = np.empty(lo[nb], np.int32)
+    found = np.empty(n, np.int32)
+    need = np.empty(nb, np.int64)
     for b in prange(nb):
-        fitted[b] = _cell_rows(b * cb, min(ncell, (b + 1) * cb), x, u, r_int, half, box, periodic,
-                               skin, rods, nc, k, start, members, counts, buf, room, False)
+        need[b] = _forward_pairs(b * cb, min(ncell, (b + 1) * cb), x, u, r_int, half, box,
+                                 periodic, skin, rods, nc, k, start, members, found, buf, lo[b],
+                                 lo[b + 1])
+    fits = True
+    for b in range(nb):
+        fits = fits and need[b] <= lo[b + 1] - lo[b]
+    if not fits:  # again, with the room each task needed
+        for b in range(nb):
+            lo[b + 1] = lo[b] + need[b]
+        buf = np.empty(lo[nb], np.int32)
+        for b in prange(nb):
+            _forward_pairs(b * cb, min(ncell, (b + 1) * cb), x, u, r_int, half, box, periodic,
+                           skin, rods, nc, k, start, members, found, buf, lo[b], lo[b + 1])
+    istart = np.zeros(n + 1, np.int64)  # counting sort by the lower index
+    for b in range(nb):
+        at = lo[b]
+        for qi in range(start[min(ncell, b * cb)], start[min(ncell, (b + 1) * cb)]):
+            i = members[qi]
+            for e in range(at, at + found[qi]):
+                istart[min(i, buf[e]) + 1] += 1
+            at += found[qi]
     for i in range(n):
-        counts[i + 1] += counts[i]
-    istart = counts
+        istart[i + 1] += istart[i]
     npair = istart[n]
     pi = np.empty(npair, np.int32)
     pj = np.empty(npair, np.int32)
-    for b in prange(nb):
-        c0 = b * cb
-        c1 = min(ncell, c0 + cb)
-        if fitted[b]:
-            at = room[c0]
-            for q in range(start[c0], start[c1]):
-                i = members[q]
-                for e in range(istart[i], istart[i + 1]):
-                    pj[e] = buf[at]
-                    at += 1
-        else:
-            _cell_rows(c0, c1, x, u, r_int, half, box, periodic, skin, rods, nc, k, start,
-                       members, counts, pj, istart, True)
+    fill = istart[:n].copy()
+    for b in range(nb):
+        at = lo[b]
+        for qi in range(start[min(ncell, b * cb)], start[min(ncell, (b + 1) * cb)]):
+            i = members[qi]
+            for e in range(at, at + found[qi]):
+                j = buf[e]
+                a = min(i, j)
+                pj[fill[a]] = max(i, j)
+                fill[a] += 1
+            at += found[qi]
     for b in prange((n + BLOCK - 1) // BLOCK):
         for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
-            for e in range(istart[i], istart[i + 1]):
-                pi[e] = i
+            a = istart[i]
+            for q in range(a, istart[i + 1]):  # insertion sort of the row by j
+                v = pj[q]
+                r = q - 1
+                while r >= a and pj[r] > v:
+                    pj[r + 1] = pj[r]
+                    r -= 1
+                pj[r + 1] = v
+                pi[q] = i
     jstart, jk = transpose(pj, n)
     return pi, pj, istart, jstart, jk
 
