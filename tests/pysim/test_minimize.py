@@ -108,12 +108,17 @@ def test_lbfgs_does_not_depend_on_the_scale_of_the_energy():
     not depend on ``k_n``: with the forces of a packing near jamming (1e-14 of those of
     k_n = 1), it balances the same packing to the same relative tolerance and ends where
     it does with k_n = 1. Unscaled, it took the same first move of one length unit
-    against gradients 1e14 times smaller, and ended elsewhere."""
+    against gradients 1e14 times smaller, and ended elsewhere.
+
+    A state balanced to ``f_tol`` is defined only to about ``f_tol / k_soft`` along its
+    softest modes (here some ten times ``f_tol``: the two ends differed by 1.2e-6 at
+    ``f_tol`` = 1e-7 and by 1.0e-7 at 1e-8, measured 2026-11-25), so the ends are balanced
+    to 1e-8 and compared to 1e-6."""
     ends = []
     for k_n in (1.0, 1e-14):
         sim = overlapping_rods(2, 40, 1.0, 0.95, 3, "end_bonds", k_n)
-        it, fmax, tmax = lbfgs(sim, f_tol=1e-7 * k_n, max_iter=20_000)
-        assert it > 10 and fmax < 1e-7 * k_n and tmax < 1e-7 * k_n, (k_n, it, fmax, tmax)
+        it, fmax, tmax = lbfgs(sim, f_tol=1e-8 * k_n, max_iter=20_000)
+        assert it > 10 and fmax < 1e-8 * k_n and tmax < 1e-8 * k_n, (k_n, it, fmax, tmax)
         ends.append(sim.state.x.copy())
     np.testing.assert_allclose(ends[1], ends[0], atol=1e-6)
 
