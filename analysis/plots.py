@@ -221,34 +221,71 @@ def trends(summary, parameter, observables, out, title=None, references=None, se
     _save(fig, out)
 
 
+def _seed_groups(runs):
+    """Runs of :func:`tapping_curves` grouped by their ``group`` (variant and engine; a
+    run without one is its own group), in order of first appearance: ``(first run,
+    curves)``, where a group of several seeds has as curves the seed mean of every column
+    over the frames all its runs have, with ``<col>_min`` and ``<col>_max`` of the
+    averaged columns beside it, and ``seeds``, their number."""
+    import pandas as pd
+
+    groups: dict = {}
+    for k, r in enumerate(runs):
+        groups.setdefault(r.get("group", k), []).append(r)
+    out = []
+    for members in groups.values():
+        if len(members) == 1:
+            out.append((members[0], members[0]["curves"], 1))
+            continue
+        steps = set(members[0]["curves"].step)
+        for m in members[1:]:
+            steps &= set(m["curves"].step)
+        frames = [m["curves"].set_index("step").loc[sorted(steps)] for m in members]
+        stacked = pd.concat(frames, keys=range(len(frames)))
+        mean = stacked.groupby(level=1).mean()
+        for col in [c for c in mean.columns if c.endswith("_avg")]:
+            mean[f"{col}_min"] = stacked[col].groupby(level=1).min()
+            mean[f"{col}_max"] = stacked[col].groupby(level=1).max()
+        out.append((members[0], mean.reset_index(), len(members)))
+    return out
+
+
 def tapping_curves(runs, out, phi_max=None, n_layers: int = 4, layer_label: str = ""):
     """Tapping: volumetric density (raw, thin; moving average over one oscillation,
     thick) and mean angle between spines and the base versus ``1 + tap number`` on a
-    logarithmic axis, globally and per layer; all runs overlaid.
+    logarithmic axis, globally and per layer; all runs overlaid. Runs of one ``group``
+    (the seeds of a variant on one engine) are drawn as their seed mean, thick, with the
+    band between the seeds' lowest and highest moving averages.
 
-    ``runs``: dicts with ``label``, ``engine``, ``index`` (run number for the colour)
-    and ``curves`` (:func:`analysis.summary.tap_curves`). ``phi_max``: ``{label: value}``
-    of aligned-packing limits drawn as reference lines on the density panels.
+    ``runs``: dicts with ``label``, ``engine``, ``index`` (run number for the colour),
+    ``curves`` (:func:`analysis.summary.tap_curves`) and optionally ``group`` and
+    ``group_label``. ``phi_max``: ``{label: value}`` of aligned-packing limits drawn as
+    reference lines on the density panels.
     """
     phi_max = phi_max or {}
     fig, axes = plt.subplots(2, n_layers + 1, figsize=(3.3 * (n_layers + 1), 6.4),
                              sharex=True, squeeze=False)
     cmap = plt.get_cmap("tab10")
-    for r in runs:
-        cv = r["curves"]
+    for r, cv, seeds in _seed_groups(runs):
         x = 1.0 + cv.tap.clip(lower=0.0)
         color = cmap(r["index"] % 10)
         ls = "-" if r["engine"] == "pysim" else ("--" if r["engine"] == "lammps" else ":")
-        axes[0, 0].plot(x, cv.phi, color=color, lw=0.4, alpha=0.5, ls=ls)
-        axes[0, 0].plot(x, cv.phi_avg, color=color, lw=1.4, ls=ls, label=r["label"])
+        label = (r["label"] if seeds == 1
+                 else f"{r.get('group_label', r['label'])}, mean of {seeds} seeds")
         for k in range(n_layers + 1):
             suffix = "" if k == 0 else f"_layer{k}"
             for row, q in enumerate(("phi", "angle")):
-                if f"{q}{suffix}" not in cv or (row == 0 and k == 0):
+                col = f"{q}{suffix}"
+                if col not in cv:
                     continue
-                axes[row, k].plot(x, cv[f"{q}{suffix}"], color=color, lw=0.4, alpha=0.5, ls=ls)
-                if f"{q}{suffix}_avg" in cv:
-                    axes[row, k].plot(x, cv[f"{q}{suffix}_avg"], color=color, lw=1.4, ls=ls)
+                if seeds == 1:
+                    axes[row, k].plot(x, cv[col], color=color, lw=0.4, alpha=0.5, ls=ls)
+                elif f"{col}_avg_min" in cv:
+                    axes[row, k].fill_between(x, cv[f"{col}_avg_min"], cv[f"{col}_avg_max"],
+                                              color=color, alpha=0.2, lw=0)
+                if f"{col}_avg" in cv:
+                    axes[row, k].plot(x, cv[f"{col}_avg"], color=color, lw=1.4, ls=ls,
+                                      label=label if (row, k) == (0, 0) else None)
     axes[0, 0].set_title("filled part of the cylinder", fontsize=9)
     for k in range(n_layers):
         axes[0, k + 1].set_title(f"layer {k + 1} {layer_label}".strip(), fontsize=9)
@@ -269,8 +306,55 @@ def tapping_curves(runs, out, phi_max=None, n_layers: int = 4, layer_label: str 
         ax.xaxis.set_major_formatter(FuncFormatter(lambda val, _: f"{val:g}"))
         ax.xaxis.set_minor_formatter(NullFormatter())
     axes[0, 0].legend(fontsize=6, loc="lower right")
-    fig.suptitle("tapping: thin lines raw frames, thick the moving average over one oscillation; "
+    fig.suptitle("tapping: thin lines raw frames, thick the moving average over one oscillation "
+                 "(several seeds: their mean, the band between the lowest and highest); "
                  "solid pysim, dashed LAMMPS, dotted LIGGGHTS", fontsize=9)
+    fig.tight_layout()
+    _save(fig, out)
+
+
+def tapping_sets(table, out, labels=None):
+    """Tapping: the settled and the late (last eighth of the taps) density and mean angle
+    to the base of every parameter set, per engine: each seed a small dot, the seed mean a
+    large marker with two standard errors of it as error bar (needs two seeds).
+
+    ``table``: rows ``variant, engine, observable, seed, value`` with observables
+    ``phi_settled``, ``phi_late``, ``angle_settled``, ``angle_late``; ``labels``:
+    ``{variant: tick label}``."""
+    variants = list(dict.fromkeys(table.variant))
+    engines = [e for e in ENGINE_COLORS if e in set(table.engine)] + sorted(
+        set(table.engine) - set(ENGINE_COLORS))
+    fig, axes = plt.subplots(1, 2, figsize=(max(8.0, 1.6 * len(variants) + 3), 4.2))
+    panels = [(axes[0], "phi", r"volumetric density $\phi$"),
+              (axes[1], "angle", "mean angle to the base (deg)")]
+    width = 0.7 / max(1, len(engines))
+    for ax, q, ylabel in panels:
+        for e_i, engine in enumerate(engines):
+            color = ENGINE_COLORS.get(engine, "k")
+            for kind, marker, fill in (("settled", "s", "none"), ("late", "o", color)):
+                sub = table[(table.engine == engine) & (table.observable == f"{q}_{kind}")]
+                label = f"{engine}, {kind}"
+                for v_i, variant in enumerate(variants):
+                    vals = sub[sub.variant == variant].value.dropna().to_numpy()
+                    if not len(vals):
+                        continue
+                    xpos = v_i + (e_i - (len(engines) - 1) / 2) * width
+                    ax.plot(np.full(len(vals), xpos), vals, ".", color=color, ms=3, alpha=0.6)
+                    err = 2 * vals.std(ddof=1) / np.sqrt(len(vals)) if len(vals) > 1 else None
+                    ax.errorbar(xpos, vals.mean(), yerr=err, fmt=marker, color=color,
+                                mfc=fill, ms=7, capsize=3, label=label)
+                    label = None  # one legend entry per engine and state
+        ax.set_xticks(range(len(variants)))
+        ax.set_xticklabels([(labels or {}).get(v, v) for v in variants], fontsize=7)
+        ax.set_ylabel(ylabel)
+        ax.grid(axis="y", lw=0.3, alpha=0.5)
+    axes[1].axhline(np.degrees(np.pi / 2 - 1.0), color="grey", lw=0.8, ls=":")
+    axes[1].text(0.01, np.degrees(np.pi / 2 - 1.0), "isotropic", fontsize=6, color="grey",
+                 va="bottom", transform=axes[1].get_yaxis_transform())
+    axes[0].legend(fontsize=6)
+    fig.suptitle("tapping: settled (squares) and late state (circles: mean over the last "
+                 "eighth of the taps), seed means with two standard errors, dots the seeds",
+                 fontsize=9)
     fig.tight_layout()
     _save(fig, out)
 

@@ -256,12 +256,30 @@ def tap_curves(run: RunData, start_step: int, dt: float, period: float, amplitud
     return curves
 
 
+#: fraction of a tapping run's taps whose frames make its late-state means (the last 50 of
+#: 400 taps, 12.5 of 100; never less than the last tap)
+LATE_FRACTION = 1.0 / 8.0
+
+
+def late_window(curves: pd.DataFrame, fraction: float = LATE_FRACTION) -> pd.DataFrame:
+    """The frames of the last ``fraction`` of the taps of a tapping run (at least the
+    frames of its last tap; the last frame if it has no tap), from :func:`tap_curves`."""
+    taps = float(curves.tap.max())
+    width = max(1.0, fraction * taps)
+    late = curves[(curves.tap > taps - width + 1e-9) & (curves.tap > 0)]
+    return late if len(late) else curves.iloc[-1:]
+
+
 def analyse_tapping(run_dir, **plan):
     """Observables and per-frame curves (:func:`tap_curves`, keyword arguments ``plan``) of
     a tapping run: ``phi_settled`` and ``angle_settled`` (the packing before the first
     tap), ``phi_tapped`` and ``angle_tapped`` (means over the frames of the last tap, with
     their standard deviation as uncertainty), the changes ``phi_gain`` and
-    ``angle_gain``, ``p2_z_tapped``, ``taps`` and the tapped angle per layer."""
+    ``angle_gain``, ``p2_z_tapped``, ``taps`` and the tapped angle per layer; and the late
+    state, ``phi_late``, ``angle_late`` (degrees), ``p2_z_late`` and ``angle_late_layer<k>``:
+    means over the frames of the last eighth of the taps (:func:`late_window`), with the
+    standard deviation over those frames as the uncertainty of the first two (a spread
+    over taps, not a seed-to-seed error)."""
     run = RunData(run_dir)
     curves = tap_curves(run, **plan)
     if not len(curves):
@@ -270,6 +288,7 @@ def analyse_tapping(run_dir, **plan):
     last_tap = curves[curves.tap > curves.tap.max() - 1.0 + 1e-9]
     if not len(last_tap):
         last_tap = curves.iloc[-1:]
+    late = late_window(curves)
     rows = [("phi_settled", float(first.phi), np.nan),
             ("angle_settled", float(first.angle), np.nan),
             ("phi_tapped", float(last_tap.phi.mean()), float(last_tap.phi.std(ddof=0))),
@@ -278,9 +297,13 @@ def analyse_tapping(run_dir, **plan):
             ("angle_gain", float(last_tap.angle.mean() - first.angle), np.nan),
             ("p2_z_tapped", float(last_tap.p2_z.mean()), np.nan),
             ("taps", float(round(curves.tap.max(), 6)), np.nan)]
+    rows += [("phi_late", float(late.phi.mean()), float(late.phi.std(ddof=0))),
+             ("angle_late", float(late.angle.mean()), float(late.angle.std(ddof=0))),
+             ("p2_z_late", float(late.p2_z.mean()), np.nan)]
     k = 1
     while f"angle_layer{k}" in curves:
         rows.append((f"angle_tapped_layer{k}", float(last_tap[f"angle_layer{k}"].mean()), np.nan))
+        rows.append((f"angle_late_layer{k}", float(late[f"angle_layer{k}"].mean()), np.nan))
         k += 1
     return rows, curves, run.thermo
 

@@ -72,6 +72,7 @@ def get_final_output():
     for study in sorted({s for s, _ in study_variants()}):
         if study in tapping:
             out.append(f"{RESULTS}/{study}/figures/tapping.png")
+            out += [f"{RESULTS}/{study}/figures/sets.png", f"{RESULTS}/{study}/sets.csv"]
         elif study in deposit:
             out.append(f"{RESULTS}/{study}/figures/deposit.png")
             if "alpha" in varying_parameters(CFG, study):  # deposits versus d = 1 + alpha

@@ -279,6 +279,31 @@ rule plot_tapping:
         "{PYTHON} -m workflows.scripts.plot_tapping --curves-out {output} {params.dirs} 2> {log}"
 
 
+rule plot_tapping_sets:
+    input:
+        lambda wc: [
+            f"{d}/{name}" for d in run_dirs(wc.study) for name in ("observables.csv", "run.json")
+        ],
+    output:
+        figure=report(
+            f"{RESULTS}/{{study}}/figures/sets.png",
+            caption="../report/tapping_sets.rst",
+            category="{study}",
+        ),
+        table=report(
+            f"{RESULTS}/{{study}}/sets.csv",
+            caption="../report/tapping_sets.rst",
+            category="{study}",
+        ),
+    log:
+        f"{RESULTS}/{{study}}/figures/sets.log",
+    params:
+        dirs=lambda wc: " ".join(run_dirs(wc.study)),
+    shell:
+        "{PYTHON} -m workflows.scripts.plot_tapping --sets-out {output.figure}"
+        " --sets-table {output.table} {params.dirs} 2> {log}"
+
+
 rule plot_tapping_snapshots:
     input:
         lambda wc: [

@@ -1,5 +1,8 @@
 """Figures of a tapping study: density and mean angle versus tap number for every run
-(``--curves-out``), and snapshots of one variant's runs (``--snapshots-out``)."""
+(``--curves-out``; the seeds of a variant on one engine as their mean and band), the
+settled and late density and angle of every parameter set with seed means and standard
+errors (``--sets-out``, its table ``--sets-table``), and snapshots of one variant's runs
+(``--snapshots-out``)."""
 from __future__ import annotations
 
 import argparse
@@ -11,6 +14,7 @@ import pandas as pd
 
 from analysis import plots, theory
 from analysis.io import read_particle_frames
+from pysim.io import atomic_write_text
 from workflows.case import ConfigError, load_case
 from workflows.runner import ok_runs
 
@@ -24,7 +28,8 @@ def curves_figure(run_dirs, out: Path) -> int:
         limits[rf"$\phi_{{max}}(\alpha={alpha:g})$"] = float(theory.phi_max_aligned(alpha))
         variant, seed, engine = d.parent.parent.name, d.parent.name, d.name
         runs.append({"label": f"{variant} {engine} {seed}", "engine": engine,
-                     "index": variants.index(variant), "curves": pd.read_csv(d / "curves.csv")})
+                     "index": variants.index(variant), "curves": pd.read_csv(d / "curves.csv"),
+                     "group": (variant, engine), "group_label": f"{variant} {engine}"})
     if not runs:
         plots.message_figure(out, "no successful tapping run to draw: see failures.csv")
         return 0
@@ -32,6 +37,54 @@ def curves_figure(run_dirs, out: Path) -> int:
     plots.tapping_curves(runs, out, phi_max=limits,
                          layer_label=f"({thickness['diameter'] / 2 * 1e3:g} mm thick)"
                          if thickness["diameter"] < 0.1 else "")
+    return 0
+
+
+#: what the sets figure and table show: settled and late (last eighth of the taps) state
+SET_OBSERVABLES = ["phi_settled", "phi_late", "angle_settled", "angle_late", "p2_z_late",
+                   "angle_late_layer1", "angle_late_layer2", "angle_late_layer3",
+                   "angle_late_layer4"]
+
+
+def set_label(case: dict) -> str:
+    """Tick label of a parameter set: its restitution, intensity, aspect ratio and N."""
+    return (f"e_n {case['contact'].get('restitution', float('nan')):g}, "
+            f"Gamma {case['protocol']['intensity']:g}\n"
+            f"alpha {case['particles']['aspect_ratio']:g}, N {case['particles']['n']}")
+
+
+def sets_table(run_dirs) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
+    """Per-seed values (``variant, engine, seed, observable, value``) of
+    :data:`SET_OBSERVABLES` from the successful runs' ``observables.csv``, their per-set
+    statistics (``variant, engine, observable, seeds, mean, std, sem``: standard
+    deviation over seeds and standard error of the mean, NaN for one seed), and the
+    variants' tick labels."""
+    frames, labels = [], {}
+    for d in ok_runs(run_dirs):
+        variant = d.parent.parent.name
+        labels.setdefault(variant, f"{variant}\n" + set_label(load_case(d.parent / "case.yaml")))
+        obs = pd.read_csv(d / "observables.csv")
+        obs = obs[obs.observable.isin(SET_OBSERVABLES)]
+        frames.append(pd.DataFrame({"variant": variant, "engine": d.name, "seed": d.parent.name,
+                                    "observable": obs.observable, "value": obs.value}))
+    cols = ["variant", "engine", "seed", "observable", "value"]
+    values = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=cols)
+    g = values.groupby(["variant", "engine", "observable"], sort=False)["value"]
+    stats = g.agg(seeds="count", mean="mean", std="std").reset_index()
+    stats["sem"] = stats["std"] / np.sqrt(stats["seeds"])
+    return values, stats, labels
+
+
+def sets_figure(run_dirs, out: Path | None, table_out: Path | None) -> int:
+    values, stats, labels = sets_table(run_dirs)
+    if table_out:
+        table_out.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(table_out, stats.to_csv(index=False, float_format="%.6g"))
+    if out:
+        if values.empty:
+            plots.message_figure(out, "no successful tapping run to draw: see failures.csv")
+        else:
+            plots.tapping_sets(values, out, labels)
     return 0
 
 
@@ -57,6 +110,9 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--curves-out", type=Path, help="density and angle versus taps (PNG)")
     ap.add_argument("--snapshots-out", type=Path, help="snapshots of the runs (PNG)")
+    ap.add_argument("--sets-out", type=Path,
+                    help="settled and late state per parameter set and engine (PNG)")
+    ap.add_argument("--sets-table", type=Path, help="the statistics of --sets-out (CSV)")
     ap.add_argument("--taps", type=float, nargs="+", default=[0.0, -1.0],
                     help="taps to render (-1: the last one)")
     ap.add_argument("run_dirs", nargs="+", type=Path)
@@ -64,6 +120,8 @@ def main(argv=None) -> int:
     try:
         if a.curves_out:
             curves_figure(a.run_dirs, a.curves_out)
+        if a.sets_out or a.sets_table:
+            sets_figure(a.run_dirs, a.sets_out, a.sets_table)
         if a.snapshots_out:
             taps = [t if t >= 0 else np.inf for t in a.taps]
             snapshots_figure(a.run_dirs, a.snapshots_out, taps)
