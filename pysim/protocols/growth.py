@@ -12,7 +12,7 @@
    ``increment`` steps instead. FIRE alone cannot decide this for rods: on the
    ill-conditioned landscape near jamming it crawls, and every FIRE run of the rod
    growths that ended "jammed" had stopped at its iteration cap, with the energy still
-   falling (README, growth's "jammed").
+   falling (docs/studies/random_packings.md, growth's "jammed").
 3. **Bisect** between the last unjammed (``phi_lo``) and the first jammed (``phi_hi``)
    packing fraction, always restarting from the relaxed unjammed packing, until
    ``phi_hi - phi_lo < tolerance``; ``phi_J = phi_hi``.

@@ -73,8 +73,8 @@ def test_growth_to_jamming_of_spheres(tmp_path):
 
 def test_growth_of_rods_decides_every_relaxation(tmp_path):
     """3-D rods of alpha 1: every relaxation of the cycles settles (at a minimum, or at
-    zero energy) inside its rounds, which FIRE alone did not do for rods (README, growth's
-    "jammed"); the rods jam denser than spheres (about 0.64) and hypostatic, with fewer
+    zero energy) inside its rounds, which FIRE alone did not do for rods
+    (docs/studies/random_packings.md, growth's "jammed"); the rods jam denser than spheres (about 0.64) and hypostatic, with fewer
     than the isostatic 10 contacts per rod (measured: 100 rods, phi_J 0.6925, z 9.6, 18 s)."""
     out = run_case(tmp_path, growth_case(100, 3, alpha=1.0, phi_grow=0.62, increment=0.01,
                                          tolerance=1e-3))

@@ -28,7 +28,7 @@ def test_3d_body_rods_run_convert_and_are_flagged(tmp_path):
                      tmp_path / "body", timeout=600)
     # LAMMPS 22 Jul 2025: the rods heat up without bound (shared/engines.md) and the
     # check turns the run into a reported failure. If this assertion fails, a newer
-    # LAMMPS may have fixed the style: rerun results/body_check and update the README.
+    # LAMMPS may have fixed the style: rerun results/body_check and update docs/studies/random_packings.md.
     assert rec["status"] == "failed" and "runaway kinetic energy" in rec["error"], rec
     run = RunData(tmp_path / "body" / "failed")  # the outputs are kept for inspection
     frame, contacts = run.frames()[-1]

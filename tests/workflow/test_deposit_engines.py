@@ -61,7 +61,7 @@ def test_lammps_deposit_deck(dep_case, tmp_path):
     rows, _ = analyse_deposit(tmp_path / "lammps", width=w, gravity=1.0, slab=3.0,
                               base_wall_id=-5)
     # LAMMPS now gives the apparent mass at the base (this column falls freely, so its
-    # walls may push down: above 1 is possible, README)
+    # walls may push down: above 1 is possible, docs/studies/deposition.md)
     assert 0.5 < {n: x for n, x, _ in rows}["apparent_mass_fraction"] < 1.5
 
     (tmp_path / "case.yaml").write_text(yaml.safe_dump(case))
