@@ -10,7 +10,8 @@ in ``V`` (tension positive). The pressure is ``p = -tr(sigma)/d``.
 * horizontal slabs (profiles versus depth): :class:`StressProfile`;
 * square (2-D) or cubic (3-D) elements: :class:`StressField`;
 * principal stresses and the direction of the major (most compressive) one:
-  :func:`principal_stresses`, :func:`major_axis_angle`;
+  :func:`principal_stresses`, :func:`major_axis_angle`, and how vertical those
+  directions are: :func:`major_axis_order`;
 * stresses on a wall from the wall rows of a contact table: :class:`WallStress`.
 
 Wall rows (``j <= 0``, :mod:`analysis.walls`) contribute their branch
@@ -79,6 +80,22 @@ def major_axis_angle(sigma, dim: int = 3, vertical: int | None = None) -> np.nda
         ang = np.where(ang <= -np.pi / 2, ang + np.pi, ang)
         return np.where(ang > np.pi / 2, ang - np.pi, ang)
     return np.arcsin(np.clip(np.abs(v[..., vertical]), 0.0, 1.0))
+
+
+def major_axis_order(angles, dim: int = 3, weights=None) -> float:
+    """How vertical the major principal axes are, from their angles to the horizontal
+    ``angles`` (radians, :func:`major_axis_angle`; NaN entries are left out), optionally
+    weighted: the mean of ``-cos 2 theta`` in 2-D and of ``P2(sin theta) = (3 sin^2
+    theta - 1) / 2`` in 3-D. Both are 1 when every major axis is vertical, 0 for
+    directions spread uniformly (over the angle in 2-D, over the sphere in 3-D) and -1
+    (2-D) or -1/2 (3-D) when all are horizontal. NaN without a finite angle."""
+    a = np.asarray(angles, dtype=np.float64).ravel()
+    w = np.ones_like(a) if weights is None else np.asarray(weights, np.float64).ravel()
+    ok = np.isfinite(a) & (w > 0)
+    if not ok.any():
+        return float("nan")
+    f = -np.cos(2.0 * a[ok]) if dim == 2 else 1.5 * np.sin(a[ok]) ** 2 - 0.5
+    return float(np.average(f, weights=w[ok]))
 
 
 def coarse_grain(frame: Frame, sigma_i: np.ndarray, edges: list) -> tuple[np.ndarray, np.ndarray]:
@@ -217,16 +234,19 @@ class StressField(Observable):
     ``count`` (particles per element), ``principal`` (cells..., d) values ascending
     (most compressive first), ``major_angle`` (:func:`major_axis_angle`, radians;
     nan in empty elements), ``angle_hist`` and ``angle_edges``: the distribution of the
-    major axis angle over non-empty elements (density).
+    major axis angle over non-empty elements (density), and ``major_order``
+    (:func:`major_axis_order` over the elements holding at least ``min_count`` particle
+    centres: 1 all major axes vertical, 0 spread uniformly).
     """
 
     _results = ("edges", "sigma", "pressure", "count", "principal", "major_angle",
-                "angle_hist", "angle_edges")
+                "angle_hist", "angle_edges", "major_order")
 
-    def __init__(self, element: float, angle_bins: int = 18):
+    def __init__(self, element: float, angle_bins: int = 18, min_count: int = 1):
         if not element > 0:
             raise ValueError(f"element must be > 0, got {element}")
         self.element, self.angle_bins = float(element), int(angle_bins)
+        self.min_count = int(min_count)
 
     def compute(self, frame: Frame, contacts: Contacts):
         d = frame.dim
@@ -242,8 +262,10 @@ class StressField(Observable):
         ok = np.isfinite(ang)
         hist, he = np.histogram(ang[ok], bins=self.angle_bins, range=rng,
                                 density=bool(ok.any()))
+        order = major_axis_order(np.where(cnt >= self.min_count, ang, np.nan), d)
         self._set(edges=edges, sigma=sig, pressure=_pressure_of(sig, d), count=cnt,
-                  principal=vals, major_angle=ang, angle_hist=hist, angle_edges=he)
+                  principal=vals, major_angle=ang, angle_hist=hist, angle_edges=he,
+                  major_order=order)
         return self
 
 

@@ -308,6 +308,11 @@ def analyse_tapping(run_dir, **plan):
     return rows, curves, run.thermo
 
 
+#: side of the stress elements of a deposit, in particle lengths ``L + D`` (science.md: "square
+#: elements of 5 particle lengths")
+STRESS_ELEMENT = 5.0
+
+
 def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density: float = 1.0,
                     base_wall_id: int | None = None):
     """Observables of a settled deposit in a box of ``width`` ``W`` (the last frame):
@@ -328,6 +333,10 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
       of the data, else 0 and the fit values NaN (a straight profile fixes only the slope
       ``sigma_m / h_s``);
     * ``k_ratio``: ``sigma_hh / sigma_vv`` averaged over the lower half of the deposit;
+    * ``major_order``: how vertical the major principal stress axes are in square (cubic)
+      elements of :data:`STRESS_ELEMENT` particle lengths holding 3 grains or more
+      (:func:`analysis.stress.major_axis_order`: 1 all vertical, 0 spread uniformly, the
+      isotropic distribution of directions);
     * ``apparent_mass_fraction``: vertical force on the base over the deposit's weight
       (1 without wall friction; Janssen: below 1; grain ``density`` per volume, per area
       in 2-D), when ``base_wall_id`` names the base's rows in the contact table.
@@ -343,7 +352,7 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
     from analysis.janssen import JanssenFit, JanssenFitError, janssen
     from analysis.order import AngleToHorizontal
     from analysis.packing import FilledPackingFraction, cumulative_measure, slab_packing_fraction
-    from analysis.stress import StressProfile, slab_stress_errors
+    from analysis.stress import StressField, StressProfile, slab_stress_errors
 
     run = RunData(run_dir)
     frames = run.frames()
@@ -400,6 +409,9 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
     with np.errstate(invalid="ignore", divide="ignore"):
         kr = (prof.loc[lower, "sigma_hh"] / prof.loc[lower, "sigma_vv"]).to_numpy()
     rows.append(("k_ratio", float(np.nanmean(kr)) if np.isfinite(kr).any() else np.nan, np.nan))
+    length = float(np.mean(frame.length + 2.0 * frame.radius))  # particle length L + D
+    field = StressField(STRESS_ELEMENT * length, min_count=3).compute(frame, contacts)
+    rows.append(("major_order", field.major_order, np.nan))
     if base_wall_id is not None:
         on_base = contacts.j == base_wall_id
         f_up = float(np.sum(contacts.force[on_base, v]))  # force on the grains from the base

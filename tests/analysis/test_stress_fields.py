@@ -6,7 +6,8 @@ import pytest
 from analysis.contacts import geometric_contacts
 from analysis.frame import Contacts
 from analysis.stress import (StressField, StressProfile, WallStress, major_axis_angle,
-                             particle_stress, pressure, principal_stresses, stress_tensor)
+                             major_axis_order, particle_stress, pressure, principal_stresses,
+                             stress_tensor)
 from analysis.walls import CylinderWall, PlaneWall, wall_contacts
 from tests.analysis.helpers import cubic, frame_of, square
 
@@ -132,6 +133,25 @@ def test_uniaxial_load_gives_the_major_axis():
     field = StressField(element=60.0).compute(fr2, c2)
     assert field.major_angle.ravel()[0] == pytest.approx(theta)
     assert field.angle_hist.sum() * np.diff(field.angle_edges)[0] == pytest.approx(1.0)
+    assert field.major_order == pytest.approx(-np.cos(2 * theta))
+    assert StressField(element=4.0).compute(fr, c).major_order == pytest.approx(1.0)
+    assert np.isnan(StressField(element=60.0, min_count=37).compute(fr2, c2).major_order)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_major_axis_order_of_vertical_horizontal_and_uniform_axes(dim):
+    """1 for vertical major axes, -1 (2-D) or -1/2 (3-D) for horizontal ones, and 0 on
+    average for directions spread uniformly: over the angle in 2-D, over the sphere in
+    3-D (elevation theta with sin(theta) uniform); NaN entries and zero weights do not
+    count."""
+    assert major_axis_order([np.pi / 2, -np.pi / 2 if dim == 2 else np.pi / 2], dim) == 1.0
+    assert major_axis_order([0.0, np.nan], dim) == pytest.approx(-1.0 if dim == 2 else -0.5)
+    rng = np.random.default_rng(7)
+    uniform = (rng.uniform(-np.pi / 2, np.pi / 2, 200_000) if dim == 2
+               else np.arcsin(rng.uniform(0.0, 1.0, 200_000)))
+    assert major_axis_order(uniform, dim) == pytest.approx(0.0, abs=0.01)
+    assert major_axis_order([np.pi / 2, 0.0], dim, weights=[1.0, 0.0]) == 1.0
+    assert np.isnan(major_axis_order([np.nan], dim))
 
 
 def test_particle_stress_of_wall_rows_and_cylinder_wall_profile():

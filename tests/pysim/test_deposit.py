@@ -117,6 +117,9 @@ def test_smooth_walls_put_the_whole_weight_on_the_base(deposits):
     # 0.9992 and 1.0020 for two summation orders of the same run)
     assert v["apparent_mass_fraction"] == pytest.approx(1.0, abs=0.01)
     assert 0.3 < v["phi_deposit"] < 0.7
+    # the weight loads the deposit from above: its major stress axes stand near vertical
+    # (1 all vertical, 0 spread uniformly)
+    assert 0.5 < v["major_order"] <= 1.0
     # stresses grow with depth and are compressive
     deep = prof[prof["count"] >= 3].sort_values("depth")
     assert (deep.sigma_vv > 0).all() and deep.sigma_vv.iloc[-1] > deep.sigma_vv.iloc[0]

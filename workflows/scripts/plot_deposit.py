@@ -15,11 +15,11 @@ from analysis import plots
 from analysis.io import RunData
 from analysis.order import OrientationCorrelation, angle_to_horizontal
 from analysis.stress import StressField
+from analysis.summary import STRESS_ELEMENT
 from workflows.runner import ok_runs
 
-#: ``Q(r)`` out to this many particle lengths ``L + D``; stress elements of this many
+#: ``Q(r)`` out to this many particle lengths ``L + D``
 ORDER_RANGE = 3.0
-ELEMENT = 5.0
 
 
 def main(argv=None) -> int:
@@ -34,7 +34,7 @@ def main(argv=None) -> int:
         variant, seed, engine = d.parent.parent.name, d.parent.name, d.name
         length = float(np.mean(last.length + 2.0 * last.radius))  # particle length L + D
         q = OrientationCorrelation(ORDER_RANGE * length, bins=24).compute(last)
-        field = StressField(ELEMENT * length, angle_bins=9).compute(last, contacts)
+        field = StressField(STRESS_ELEMENT * length, angle_bins=9).compute(last, contacts)
         runs.append({"label": f"{variant} {engine} {seed}", "engine": engine,
                      "index": variants.index(variant),
                      "profile": pd.read_csv(d / "curves.csv"),

@@ -15,8 +15,9 @@ OBSERVABLES = ["phi_j", "z_j", "z_j_bonds", "s_nematic_j", "sqrt_n_s2", "sqrt_n_
                "fraction_side_side", "fraction_tip_side", "fraction_tip_tip"]
 #: deposits (analysis.summary.analyse_deposit): packing fraction of the filled part, mean
 #: angle between spines and the horizontal (degrees), stress ratio K = sigma_hh / sigma_vv
-#: in the lower half, Janssen saturation depth h_s / W of sigma_vv
-DEPOSIT_OBSERVABLES = ["phi_deposit", "angle_mean", "k_ratio", "h_s_vv"]
+#: in the lower half, how vertical the major principal stress axes are (1 all vertical, 0
+#: spread uniformly), Janssen saturation depth h_s / W of sigma_vv
+DEPOSIT_OBSERVABLES = ["phi_deposit", "angle_mean", "k_ratio", "major_order", "h_s_vv"]
 
 
 #: random contacts per caging-number estimate on the trends figure (about 3 s per aspect
@@ -42,13 +43,15 @@ def references(parameter: str, dimension: int, alphas=()) -> dict:
     thin-rod limit ``phi alpha = <C>/2`` (alpha >= 10), and the caging number at the
     study's aspect ratios ``alphas`` beside the contact numbers; for deposits the mean
     angle to the horizontal of isotropic orientations (3-D: ``pi/2 - 1`` rad = 32.7 deg,
-    2-D: 45 deg) and the isotropic stress ratio ``K = 1``."""
+    2-D: 45 deg), the isotropic stress ratio ``K = 1`` and the order 0 of major stress
+    axes spread uniformly."""
     if parameter != "alpha":
         return {}
     a = np.linspace(0.0, 20.0, 201)
     iso_angle = np.degrees(np.pi / 2 - 1.0) if dimension == 3 else 45.0
     deposit = {"angle_mean": [("isotropic orientations", a, np.full_like(a, iso_angle))],
-               "k_ratio": [("isotropic stress", a, np.ones_like(a))]}
+               "k_ratio": [("isotropic stress", a, np.ones_like(a))],
+               "major_order": [("major axes spread uniformly", a, np.zeros_like(a))]}
     from analysis import theory
 
     if dimension == 2:
