@@ -211,8 +211,12 @@ def trends(summary, parameter, observables, out, title=None, references=None, se
                         ls=["--", ":", "-."][k % 3], marker="x" if len(keep) < 30 else None,
                         ms=4, lw=0.8, label=label)
         ax.set_xlabel(parameter)
+        positive = s[parameter][s[parameter] > 0]
         if lo > 0 and hi / lo > 50:  # e.g. compression rates over decades
             ax.set_xscale("log")
+        elif lo == 0 and len(positive) and hi / positive.min() > 50:
+            # e.g. Bond numbers 0, 100, ..., 1e4: linear up to the smallest positive value
+            ax.set_xscale("symlog", linthresh=float(positive.min()))
         ax.set_ylabel(o)
         if series is None or ax is axes[0][0]:  # many series: one legend
             ax.legend(fontsize=7 if series is None else 6)

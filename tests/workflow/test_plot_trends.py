@@ -80,3 +80,34 @@ def test_3d_rods_get_theory_and_caging_number():
     assert cage == "caging number" and list(ca) == [0.0, 4.0]
     assert abs(cn[0] - 7.0) < 0.6 and 9.0 < cn[1] < 11.5  # 200 trials: stderr ~0.2
     assert "z_j" not in plot_trends.references("alpha", 2) and plot_trends.references("sigma", 3) == {}
+
+
+def test_deposits_against_the_bond_number_alone(tmp_path, monkeypatch):
+    """A deposition study that varies only the Bond number (0 to 1e4) is drawn against it
+    on an axis linear up to the smallest positive Bond number and logarithmic above,
+    with the seeds' mean and the isotropic references, major stress axes included."""
+    from analysis import plots
+
+    rows = []
+    for bo in (0.0, 100.0, 1e3, 1e4):
+        for seed in (1, 2, 3):
+            for obs, value in (("phi_deposit", 0.5 - 0.01 * seed), ("major_order", 0.6),
+                               ("angle_mean", 26.0)):
+                rows.append(dict(study="dep", case=f"bo{bo:g}", engine="pysim", seed=seed,
+                                 observable=obs, value=value, bond_number=bo))
+    summary = tmp_path / "summary.csv"
+    pd.DataFrame(rows).to_csv(summary, index=False)
+    figs = []
+    monkeypatch.setattr(plots, "_save", lambda fig, out: figs.append(fig))
+    assert plot_trends.main(["--summary", str(summary), "--study", "dep", "--parameter",
+                             "bond_number", "--dimension", "2", "--protocol", "deposit",
+                             "--out", str(tmp_path / "t.png")]) == 0
+    axes = {ax.get_ylabel(): ax for ax in figs[0].axes}
+    assert set(axes) == {"phi_deposit", "angle_mean", "major_order"}
+    assert all(ax.get_xscale() == "symlog" for ax in axes.values())
+    means = np.asarray(axes["phi_deposit"].containers[0].lines[0].get_ydata(), dtype=float)
+    np.testing.assert_allclose(means, 0.48)  # the mean over the three seeds
+    refs = {ylabel: [ln.get_ydata()[0] for ln in ax.get_lines()
+                     if ln.get_label().startswith(("isotropic", "major axes"))]
+            for ylabel, ax in axes.items()}
+    assert refs["angle_mean"] == [45.0] and refs["major_order"] == [0.0]

@@ -59,6 +59,19 @@ def restitution_case():
     return None
 
 
+#: case parameters a deposition study derives from its Bond number (the law stiffened with
+#: the cohesion) or does not analyse
+FOLLOW_BOND_NUMBER = {"k_n", "k_t", "gamma_n", "gamma_t", "dt", "thermo_every", "dump_every"}
+
+
+def deposit_trend(study):
+    """Whether a deposition study gets a trends figure: its variants differ in the aspect
+    ratio, or in the Bond number and what follows from it alone (not, e.g., in the wall
+    friction or the feed, which a line through the Bond numbers would mix up)."""
+    params = set(varying_parameters(CFG, study))
+    return "alpha" in params or params - FOLLOW_BOND_NUMBER == {"bond_number"}
+
+
 def get_final_output():
     out = [f"{RESULTS}/summary.csv", f"{RESULTS}/comparison.csv", f"{RESULTS}/failures.csv"]
     if any(r.engine.startswith("lammps") and CFG["_cases"][(r.study, r.variant, r.seed)]["particles"]
@@ -75,7 +88,7 @@ def get_final_output():
             out += [f"{RESULTS}/{study}/figures/sets.png", f"{RESULTS}/{study}/sets.csv"]
         elif study in deposit:
             out.append(f"{RESULTS}/{study}/figures/deposit.png")
-            if "alpha" in varying_parameters(CFG, study):  # deposits versus d = 1 + alpha
+            if deposit_trend(study):  # deposits versus d = 1 + alpha or the Bond number
                 out.append(f"{RESULTS}/{study}/figures/trends.png")
         elif varying_parameters(CFG, study):
             out.append(f"{RESULTS}/{study}/figures/trends.png")

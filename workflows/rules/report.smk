@@ -59,7 +59,7 @@ rule plot_study:
 #: physical parameters a study's trends are drawn against, in order of preference: the
 #: time step or output intervals may vary beside them (small particles need a shorter
 #: step, slow runs write less often) and are never the axis then
-TREND_PARAMETERS = ("alpha", "sigma", "kappa")
+TREND_PARAMETERS = ("alpha", "sigma", "kappa", "bond_number")
 
 
 def _trend_parameter(study):

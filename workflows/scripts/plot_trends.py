@@ -37,21 +37,28 @@ def caging_curve(alphas) -> tuple[np.ndarray, np.ndarray]:
     return a, np.asarray(c)
 
 
-def references(parameter: str, dimension: int, alphas=()) -> dict:
+def deposit_references(dimension: int, x) -> dict:
+    """Isotropic references of deposits over the parameter values ``x``: the mean angle
+    to the horizontal of isotropic orientations (3-D: ``pi/2 - 1`` rad = 32.7 deg, 2-D:
+    45 deg), the isotropic stress ratio ``K = 1`` and the order 0 of major stress axes
+    spread uniformly."""
+    x = np.asarray(x, dtype=float)
+    iso_angle = np.degrees(np.pi / 2 - 1.0) if dimension == 3 else 45.0
+    return {"angle_mean": [("isotropic orientations", x, np.full_like(x, iso_angle))],
+            "k_ratio": [("isotropic stress", x, np.ones_like(x))],
+            "major_order": [("major axes spread uniformly", x, np.zeros_like(x))]}
+
+
+def references(parameter: str, dimension: int, alphas=(), values=()) -> dict:
     """Theory on the observables' axes: isostatic counts and, in 3-D, the random contact
     equation phi = <C> V / V_excl evaluated at the isostatic <C> (alpha >= 3) with its
     thin-rod limit ``phi alpha = <C>/2`` (alpha >= 10), and the caging number at the
-    study's aspect ratios ``alphas`` beside the contact numbers; for deposits the mean
-    angle to the horizontal of isotropic orientations (3-D: ``pi/2 - 1`` rad = 32.7 deg,
-    2-D: 45 deg), the isotropic stress ratio ``K = 1`` and the order 0 of major stress
-    axes spread uniformly."""
+    study's aspect ratios ``alphas`` beside the contact numbers; for deposits
+    :func:`deposit_references`, against any parameter (its ``values`` give the range)."""
     if parameter != "alpha":
-        return {}
+        return deposit_references(dimension, sorted(set(values))) if len(values) else {}
     a = np.linspace(0.0, 20.0, 201)
-    iso_angle = np.degrees(np.pi / 2 - 1.0) if dimension == 3 else 45.0
-    deposit = {"angle_mean": [("isotropic orientations", a, np.full_like(a, iso_angle))],
-               "k_ratio": [("isotropic stress", a, np.ones_like(a))],
-               "major_order": [("major axes spread uniformly", a, np.zeros_like(a))]}
+    deposit = deposit_references(dimension, a)
     from analysis import theory
 
     if dimension == 2:
@@ -105,7 +112,9 @@ def main(argv=None) -> int:
     alphas = (df["alpha"].dropna().unique() if a.parameter == "alpha" and "alpha" in df
               and a.protocol != "deposit" and (df.observable == "z_j").any() else ())
     plots.trends(df, a.parameter, OBSERVABLES + DEPOSIT_OBSERVABLES, a.out, title=a.study,
-                 references=references(a.parameter, a.dimension, alphas), series=a.series)
+                 references=references(a.parameter, a.dimension, alphas,
+                                       df[a.parameter].dropna() if a.parameter in df else ()),
+                 series=a.series)
     return 0
 
 
