@@ -473,6 +473,15 @@ def validate_config(config: dict, source: str = "config") -> dict:
         if "seed" in study["case"]:
             raise ConfigError(f"{source}: studies.{name}.case.seed is set per run from "
                               f"studies.{name}.seeds; remove it")
+        for engine, seeds in study.get("engine_seeds", {}).items():
+            if engine not in study["engines"]:
+                raise ConfigError(f"{source}: studies.{name}.engine_seeds.{engine}: {engine} is "
+                                  f"not among the study's engines {study['engines']}")
+            extra = sorted(set(seeds) - set(study["seeds"]))
+            if extra:
+                raise ConfigError(f"{source}: studies.{name}.engine_seeds.{engine} = {seeds} has "
+                                  f"seeds {extra} that are not in studies.{name}.seeds = "
+                                  f"{study['seeds']}; use a subset of them")
         for vname, override in variants.items():
             merged = deep_merge(study["case"], override)
             for seed in study["seeds"]:
@@ -515,7 +524,10 @@ def runs(config: dict, skipped: list | None = None) -> list[Run]:
 
     out = []
     for (study, variant, seed), case in config["_cases"].items():
+        only = config["studies"][study].get("engine_seeds", {})
         for engine in config["studies"][study]["engines"]:
+            if seed not in only.get(engine, [seed]):
+                continue  # this engine runs fewer seeds (studies.<study>.engine_seeds)
             reason = supports(engine, case)
             if reason:
                 msg = f"skipping {engine} for study '{study}' variant '{variant}': {reason}"

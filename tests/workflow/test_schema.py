@@ -196,6 +196,23 @@ def test_tapping_container_needs_its_diameter():
         validate_case(tap_case(container={"shape": "cylinder", "width": 5e-3}), "case.yaml")
 
 
+def test_engine_seeds_run_an_engine_on_fewer_seeds():
+    """studies.<study>.engine_seeds: LAMMPS on seed 1 beside pysim on seeds 1-3; seeds
+    outside the study's, or an engine the study does not run, are clear errors."""
+    from workflows.case import runs
+
+    config = validate_config(config_with(seeds=[1, 2, 3], engine_seeds={"lammps": [1]}))
+    got = sorted((r.engine, r.seed) for r in runs(config))
+    assert got == [("lammps", 1), ("pysim", 1), ("pysim", 2), ("pysim", 3)]
+    with pytest.raises(ConfigError, match=r"engine_seeds\.lammps = \[1, 4\] has seeds \[4\] "
+                                          r"that are not in studies\.s\.seeds = \[1, 2, 3\]"):
+        validate_config(config_with(seeds=[1, 2, 3], engine_seeds={"lammps": [1, 4]}), "c.yaml")
+    with pytest.raises(ConfigError, match=r"engine_seeds\.liggghts: liggghts is not among"):
+        validate_config(config_with(engine_seeds={"liggghts": [1]}), "c.yaml")
+    with pytest.raises(ConfigError, match=r"engine_seeds.*gromacs"):
+        validate_config(config_with(engine_seeds={"gromacs": [1]}), "c.yaml")
+
+
 @pytest.mark.parametrize("path", sorted((Path(__file__).resolve().parents[2] / "workflows" /
                                          "config").glob("*.yaml")), ids=lambda p: p.name)
 def test_every_shipped_profile_validates(path):
