@@ -108,7 +108,8 @@ def coarse_grain(frame: Frame, sigma_i: np.ndarray, edges: list) -> tuple[np.nda
     """
     d = frame.dim
     x = frame.x - frame.box_lo
-    x = np.where(frame.periodic, np.mod(x, frame.box), x) + frame.box_lo
+    period = np.where(frame.periodic, frame.box, 1.0)  # no modulo by a flat 2-D box's 0
+    x = np.where(frame.periodic, np.mod(x, period), x) + frame.box_lo
     idx, shape, widths = [], [], []
     for k in range(d):
         e = edges[k] if k < len(edges) else None
