@@ -8,7 +8,8 @@
 
 A bad case file is a one-line error and exit status 2; a run that blows up stops with a
 one-line message naming the step and particles, exit status 3, and keeps its last
-checkpoint.
+checkpoint. Ctrl-C (SIGINT) stops a run with a one-line message and exit status 130; its
+last checkpoint stays, and the same command with ``--resume`` goes on from it.
 """
 from __future__ import annotations
 
@@ -78,6 +79,28 @@ def _run(case, args) -> int:
     except (BlowUpError, growth.GrowthLimitError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 3
+    except (KeyboardInterrupt, SystemError) as exc:
+        # Ctrl-C inside a compiled kernel reaches Python as a SystemError whose cause
+        # chain holds the KeyboardInterrupt
+        if not _interrupted(exc):
+            raise
+        ckpt = args.out / "checkpoint.npz"
+        where = (f"its last checkpoint, {ckpt}, stays" if ckpt.exists()
+                 else "it had written no checkpoint yet")
+        print(f"stopped by Ctrl-C: {where}; run the same command with --resume to go on",
+              file=sys.stderr)
+        return 130
     provenance.write(args.out / "run.json",
                      provenance.record("pysim", pysim.__version__, case, status="ok", **summary))
     return 0
+
+
+def _interrupted(exc: BaseException) -> bool:
+    """Whether ``exc`` is, or was caused by, a KeyboardInterrupt."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False

@@ -141,3 +141,32 @@ def test_resume_without_checkpoint_is_a_clear_error(tmp_path):
                        capture_output=True, text=True)
     assert r.returncode == 2
     assert "no checkpoint to resume from" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_ctrl_c_stops_with_a_message_and_the_run_resumes(tmp_path):
+    """SIGINT (Ctrl-C) mid-run: one line on stderr, no traceback, exit status 130, the
+    checkpoint kept; the same command with --resume finishes the run."""
+    case = validate_case(TINY)
+    cp = tmp_path / "case.yaml"
+    cp.write_text(yaml.safe_dump(case))
+    write_initial(case, tmp_path / "init.data")
+    out = tmp_path / "out"
+    proc = subprocess.Popen(pysim_run(cp, tmp_path / "init.data", out, "--checkpoint-every", "0"),
+                            stderr=subprocess.PIPE, text=True)
+    thermo_part = out / "thermo.dat.part"
+    deadline = time.time() + 120
+    while time.time() < deadline:
+        if (out / "checkpoint.npz").exists() and thermo_part.exists() \
+                and thermo_part.read_text().count("\n") > 40:
+            break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert not (out / "run.json").exists(), "the run finished before it could be stopped"
+    assert proc.returncode == 130, err
+    assert "stopped by Ctrl-C" in err and "--resume" in err and "Traceback" not in err
+    assert (out / "checkpoint.npz").exists()
+    again = subprocess.run(pysim_run(cp, tmp_path / "init.data", out, "--resume"),
+                           capture_output=True, text=True)
+    assert again.returncode == 0, again.stderr
+    assert (out / "run.json").exists() and (out / "thermo.dat").exists()
