@@ -102,6 +102,21 @@ def pysim_run(case_path, data, out, *extra):
             str(out), "--no-progress", *extra]
 
 
+def start_mid_run(case_path, data, out) -> subprocess.Popen:
+    """A pysim run (checkpointing every chunk) in the background, returned once it has
+    checkpointed and written 40 thermo lines: mid-run, for a signal to stop it."""
+    proc = subprocess.Popen(pysim_run(case_path, data, out, "--checkpoint-every", "0"),
+                            stderr=subprocess.PIPE, text=True)
+    thermo_part = out / "thermo.dat.part"
+    deadline = time.time() + 120
+    while time.time() < deadline:
+        if (out / "checkpoint.npz").exists() and thermo_part.exists() \
+                and thermo_part.read_text().count("\n") > 40:
+            break
+        time.sleep(0.05)
+    return proc
+
+
 def test_kill_9_and_resume_gives_identical_files(tmp_path):
     case = validate_case(TINY)
     cp = tmp_path / "case.yaml"
@@ -111,15 +126,7 @@ def test_kill_9_and_resume_gives_identical_files(tmp_path):
                          capture_output=True, text=True)
     assert ref.returncode == 0, ref.stderr
     out = tmp_path / "killed"
-    proc = subprocess.Popen(pysim_run(cp, tmp_path / "init.data", out, "--checkpoint-every", "0"),
-                            stderr=subprocess.PIPE)
-    thermo_part = out / "thermo.dat.part"
-    deadline = time.time() + 120
-    while time.time() < deadline:
-        if (out / "checkpoint.npz").exists() and thermo_part.exists() \
-                and thermo_part.read_text().count("\n") > 40:
-            break
-        time.sleep(0.05)
+    proc = start_mid_run(cp, tmp_path / "init.data", out)
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait()
     assert not (out / "thermo.dat").exists(), "the run finished before it could be killed"
@@ -151,15 +158,7 @@ def test_ctrl_c_stops_with_a_message_and_the_run_resumes(tmp_path):
     cp.write_text(yaml.safe_dump(case))
     write_initial(case, tmp_path / "init.data")
     out = tmp_path / "out"
-    proc = subprocess.Popen(pysim_run(cp, tmp_path / "init.data", out, "--checkpoint-every", "0"),
-                            stderr=subprocess.PIPE, text=True)
-    thermo_part = out / "thermo.dat.part"
-    deadline = time.time() + 120
-    while time.time() < deadline:
-        if (out / "checkpoint.npz").exists() and thermo_part.exists() \
-                and thermo_part.read_text().count("\n") > 40:
-            break
-        time.sleep(0.05)
+    proc = start_mid_run(cp, tmp_path / "init.data", out)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
     assert not (out / "run.json").exists(), "the run finished before it could be stopped"
