@@ -304,9 +304,11 @@ def tapping_curves(runs, out, phi_max=None, n_layers: int = 4, layer_label: str 
         ax.set_xlabel("1 + tap number")
         ax.set_ylim(0, 90)
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+    last = max((float(r["curves"].tap.max()) for r in runs if len(r["curves"])), default=1.0)
+    subs = (1.0, 2.0, 5.0) if last < 500 else (1.0, 3.0)  # labels that do not overlap
     for ax in axes.ravel():
         ax.set_xscale("log")
-        ax.xaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+        ax.xaxis.set_major_locator(LogLocator(base=10, subs=subs))
         ax.xaxis.set_major_formatter(FuncFormatter(lambda val, _: f"{val:g}"))
         ax.xaxis.set_minor_formatter(NullFormatter())
     axes[0, 0].legend(fontsize=6, loc="lower right")
