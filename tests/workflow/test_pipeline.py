@@ -84,3 +84,20 @@ def test_bad_config_stops_before_anything_runs(tmp_path):
     assert r.returncode != 0
     assert "protocol.phi_final = 1.3 is not allowed" in r.stderr
     assert not (tmp_path / "results").exists()
+
+
+@pytest.mark.parametrize("profile, trends", [("deposition_cohesion", True),
+                                             ("deposition_janssen", False),
+                                             ("tapping_long", False)])
+def test_which_profiles_get_trends_and_sets_figures(tmp_path, profile, trends):
+    """Deposits that vary only the Bond number (and what follows from it) get a trends
+    figure; deposits that also vary the walls or the feed do not (a line through their
+    Bond numbers would mix those up); tapping studies get the per-set figure and table."""
+    r = subprocess.run([SNAKEMAKE, "--snakefile", str(ROOT / "Snakefile"), "--directory",
+                        str(tmp_path), "--configfile",
+                        str(ROOT / "workflows" / "config" / f"{profile}.yaml"), "--cores", "1",
+                        "--dry-run", "--quiet", "rules"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr[-2000:]
+    rules = r.stdout + r.stderr
+    assert ("plot_trends" in rules) == trends, rules[-2000:]
+    assert ("plot_tapping_sets" in rules) == profile.startswith("tapping")
