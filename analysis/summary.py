@@ -242,7 +242,7 @@ def tap_curves(run: RunData, start_step: int, dt: float, period: float, amplitud
         row = {"step": frame.step, "tap": t / period,
                "phase": int(round(t / period * frames_per_tap)) % frames_per_tap,
                "z_base": zb, "phi": fill.phi, "top": fill.top, "angle": ang.mean_deg,
-               "p2_z": NematicOrder().compute(frame).gravity_order}
+               "p2_z": NematicOrder().compute(frame).gravity_order, "n": len(frame.ids)}
         phil = slab_packing_fraction(frame, edges, area=area)
         for k in range(n_layers):
             row[f"phi_layer{k + 1}"] = phil[k]
@@ -270,6 +270,47 @@ def late_window(curves: pd.DataFrame, fraction: float = LATE_FRACTION) -> pd.Dat
     return late if len(late) else curves.iloc[-1:]
 
 
+def tap_cycle(thermo: pd.DataFrame, start_step: int, dt: float, period: float,
+              first_tap: float = 0.0, bins: int = 10) -> pd.DataFrame:
+    """Kinetic energy and contacts over the tap cycle: the thermo rows from tap
+    ``first_tap`` on, grouped by their phase ``((step - start_step) dt / T) mod 1`` into
+    ``bins`` equal bins centred on the phases ``k / bins`` (round-off in the step plan
+    keeps a row near its nominal phase). Returns one row per bin that holds rows:
+    ``phase`` (the bin's centre, in periods; 0 is the base at rest on its way up), ``ke`` and ``n_contacts``
+    (means over the bin's rows, as the thermo table has them: total kinetic energy in J,
+    contacts) and ``rows``. Thermo rows every ``s`` steps visit the phases ``k s dt / T mod
+    1`` only, so when ``s dt / T`` is a ratio of small integers few bins are sampled."""
+    tap = (thermo.step.to_numpy() - start_step) * dt / period
+    keep = tap >= first_tap
+    phase = np.mod(tap[keep], 1.0)
+    b = np.rint(phase * bins).astype(int) % bins
+    g = pd.DataFrame({"bin": b, "ke": thermo.ke.to_numpy()[keep],
+                      "n_contacts": thermo.n_contacts.to_numpy()[keep]}).groupby("bin")
+    out = g.agg(ke=("ke", "mean"), n_contacts=("n_contacts", "mean"), rows=("ke", "size"))
+    out.insert(0, "phase", out.index.to_numpy() / bins)
+    return out.reset_index(drop=True)
+
+
+#: fewest phase bins (of ten) the late thermo rows must sample for the cycle observables
+MIN_CYCLE_BINS = 3
+
+
+def cycle_rows(cycle: pd.DataFrame, n_grains: int) -> list[tuple[str, float, float]]:
+    """Observables of :func:`tap_cycle`'s bins: ``ke_cycle`` (kinetic energy per grain
+    averaged over the sampled phases, J), ``ke_cycle_peak`` (that of the most agitated
+    phase), ``contacts_flight`` (mean contacts at the phase with fewest over those at the
+    phase with most: 1 for a bed that never lifts, small for one that flies) and
+    ``cycle_bins`` (phases sampled); all but the last ``nan`` below
+    :data:`MIN_CYCLE_BINS` sampled phases."""
+    ok = len(cycle) >= MIN_CYCLE_BINS and cycle.n_contacts.max() > 0
+    nan = np.nan
+    return [("ke_cycle", float(cycle.ke.mean() / n_grains) if ok else nan, nan),
+            ("ke_cycle_peak", float(cycle.ke.max() / n_grains) if ok else nan, nan),
+            ("contacts_flight",
+             float(cycle.n_contacts.min() / cycle.n_contacts.max()) if ok else nan, nan),
+            ("cycle_bins", float(len(cycle)), nan)]
+
+
 def analyse_tapping(run_dir, **plan):
     """Observables and per-frame curves (:func:`tap_curves`, keyword arguments ``plan``) of
     a tapping run: ``phi_settled`` and ``angle_settled`` (the packing before the first
@@ -279,7 +320,8 @@ def analyse_tapping(run_dir, **plan):
     state, ``phi_late``, ``angle_late`` (degrees), ``p2_z_late`` and ``angle_late_layer<k>``:
     means over the frames of the last eighth of the taps (:func:`late_window`), with the
     standard deviation over those frames as the uncertainty of the first two (a spread
-    over taps, not a seed-to-seed error)."""
+    over taps, not a seed-to-seed error); and how the late taps shake the bed, from the
+    thermo rows of the same window (:func:`tap_cycle`, :func:`cycle_rows`)."""
     run = RunData(run_dir)
     curves = tap_curves(run, **plan)
     if not len(curves):
@@ -305,7 +347,11 @@ def analyse_tapping(run_dir, **plan):
         rows.append((f"angle_tapped_layer{k}", float(last_tap[f"angle_layer{k}"].mean()), np.nan))
         rows.append((f"angle_late_layer{k}", float(late[f"angle_layer{k}"].mean()), np.nan))
         k += 1
-    return rows, curves, run.thermo
+    thermo = run.thermo
+    cycle = tap_cycle(thermo, plan["start_step"], plan["dt"], plan["period"],
+                      first_tap=float(late.tap.min()) - 1.0)
+    rows += cycle_rows(cycle, int(curves.n.iloc[0]))
+    return rows, curves, thermo
 
 
 #: side of the stress elements of a deposit, in particle lengths ``L + D`` (science.md: "square
