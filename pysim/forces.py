@@ -20,7 +20,11 @@ law             id  normal force (science.md section 3)
 ==============  ==  ====================================================================
 
 Damping is absolute (force per velocity), as LAMMPS ``damping velocity`` and LIGGGHTS
-``absolute_damping on``; no force limiting.
+``absolute_damping on``. By default the force is not limited: science.md's law
+``f = -(k delta + gamma v_n) n`` pulls the grains together while a damped contact opens
+fast. A law id with the bit :data:`NO_TENSION` added (``law | NO_TENSION``) clips the
+contact force at zero instead, ``f_n = max(0, k delta + gamma d(delta)/dt)``, as LAMMPS'
+``limit_damping`` keyword does; cohesion is added after the clip.
 """
 from __future__ import annotations
 
@@ -32,6 +36,8 @@ HOOKE = 0
 HERTZ = 1
 HARMONIC = 2
 LAW_IDS = {"hooke": HOOKE, "hertz": HERTZ, "harmonic": HARMONIC}
+#: bit added to a law id: no tensile contact force (the damping cannot pull)
+NO_TENSION = 8
 
 # indices into the contact parameter array (END_BONDS: 1.0 selects the end-bond geometry
 # of rod pairs, pysim.contacts.end_bond)
@@ -52,21 +58,26 @@ def contact_params(k_n, gamma_n=0.0, k_t=0.0, gamma_t=0.0, mu=0.0, f_coh=0.0, d_
 def normal_force(law, kn, gn, delta, ddelta, dsum):
     """Normal force magnitude for overlap ``delta``, overlap rate ``ddelta`` and
     contact distance ``dsum = R_i + R_j`` (see the module table); ``kn``, ``gn`` the
-    stiffness and damping."""
-    if law == HOOKE:
-        return kn * delta + gn * ddelta
-    if law == HERTZ:
-        return kn * delta * np.sqrt(delta) + gn * ddelta
-    return kn * delta / (dsum * dsum) + gn * ddelta
+    stiffness and damping; with the bit :data:`NO_TENSION` in ``law``, ``max(0, f_n)``."""
+    base = law & (NO_TENSION - 1)
+    if base == HOOKE:
+        f = kn * delta + gn * ddelta
+    elif base == HERTZ:
+        f = kn * delta * np.sqrt(delta) + gn * ddelta
+    else:
+        f = kn * delta / (dsum * dsum) + gn * ddelta
+    clip = (law & NO_TENSION) != 0 and f < 0.0
+    return 0.0 if clip else f
 
 
 @njit
 def elastic_energy(law, kn, delta, dsum):
     """Elastic energy of one contact: ``k delta^2/2``, ``2/5 k delta^(5/2)`` or
-    ``k_e/2 (delta/d_ij)^2``."""
-    if law == HOOKE:
+    ``k_e/2 (delta/d_ij)^2`` (``law`` with or without :data:`NO_TENSION`)."""
+    base = law & (NO_TENSION - 1)
+    if base == HOOKE:
         return 0.5 * kn * delta * delta
-    if law == HERTZ:
+    if base == HERTZ:
         return 0.4 * kn * delta * delta * np.sqrt(delta)
     x = delta / dsum
     return 0.5 * kn * x * x

@@ -22,7 +22,7 @@ import numpy as np
 
 from pysim import integrators as itg
 from pysim.contacts import PAIR_SCRATCH, REC_COLUMNS, pair_forces, worst_overlap
-from pysim.forces import LAW_IDS, contact_params
+from pysim.forces import LAW_IDS, NO_TENSION, contact_params
 from pysim.jit import get_threads
 from pysim.neighbors import row_starts, transpose
 from pysim.state import State
@@ -46,6 +46,9 @@ class ContactModel:
       points of the spines) or ``"end_bonds"`` (frictionless rods: one bond from each
       spine end to the other spine, :func:`pysim.contacts.end_bond`; a smooth energy
       where the closest-point law has a kink at parallel side contacts).
+    * ``limit_damping``: clip every contact's normal force (grains and walls) at zero, so
+      that the damping never pulls (LAMMPS' ``limit_damping``); off by default, as in
+      science.md's law.
     """
 
     law: str
@@ -60,6 +63,7 @@ class ContactModel:
     gamma_rot: float = 0.0
     mu_wall: float | None = None
     spine_contact: str = "closest"
+    limit_damping: bool = False
 
     def __post_init__(self):
         if self.law not in LAW_IDS:
@@ -80,7 +84,9 @@ class ContactModel:
 
     @property
     def law_id(self) -> int:
-        return LAW_IDS[self.law]
+        """The kernels' law id (:mod:`pysim.forces`), with ``NO_TENSION`` when
+        ``limit_damping``."""
+        return LAW_IDS[self.law] | (NO_TENSION if self.limit_damping else 0)
 
     @property
     def friction(self) -> bool:

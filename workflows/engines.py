@@ -46,6 +46,9 @@ def supports(engine: str, case: dict) -> str | None:
     """``None`` when the engine can run the case, else the reason it cannot."""
     if engine == "pysim":
         return None
+    if case["contact"].get("limit_damping", False):
+        return (f"contact.limit_damping is implemented on pysim only (the {engine} decks do "
+                "not pass LAMMPS' limit_damping or LIGGGHTS' limitForce)")
     if case["contact"].get("spine_contact", "closest") != "closest":
         return (f"{engine} has no end-bond rod contacts (contact.spine_contact = "
                 f"{case['contact']['spine_contact']} is pysim's)")

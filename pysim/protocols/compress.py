@@ -55,7 +55,8 @@ def model_from_case(case: dict) -> ContactModel:
                         k_t=c.get("k_t", 0.0), gamma_t=c.get("gamma_t", 0.0),
                         mu=c.get("friction", 0.0), gamma_bg=gamma_bg,
                         gamma_rot=c.get("gamma_rot", gamma_bg * length**2 / 12.0),
-                        spine_contact=c.get("spine_contact", "closest"))
+                        spine_contact=c.get("spine_contact", "closest"),
+                        limit_damping=c.get("limit_damping", False))
 
 
 def max_overlap(case: dict) -> float:

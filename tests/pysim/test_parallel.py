@@ -55,7 +55,7 @@ def test_threaded_pass_equals_serial_loop_and_reference(rng, friction):
         for key in touching:
             np.testing.assert_array_equal(touching[key], listed[key])
     else:
-        f_ref, tq_ref, vir_ref, pe_ref, nc_ref = reference(x, u, r, half, v, w, box, HOOKE, p)
+        f_ref, tq_ref, vir_ref, pe_ref, nc_ref, _ = reference(x, u, r, half, v, w, box, HOOKE, p)
         assert nc == nc_ref
         np.testing.assert_allclose(f, f_ref, rtol=1e-10, atol=1e-8)
         np.testing.assert_allclose(tq, tq_ref, rtol=1e-10, atol=1e-8)
@@ -267,18 +267,21 @@ def test_short_trajectory_against_numpy_velocity_verlet():
 
 
 def chunk_test_law(law, friction):
-    """``(law id, parameters)`` of the chunked passes' tests: the linear law, or Hertz with
-    cohesion (pairs in a cohesive gap), with or without friction."""
-    from pysim.forces import HERTZ
+    """``(law id, parameters)`` of the chunked passes' tests: the linear law, the linear law
+    without tension and a damping that clips many contacts, or Hertz with cohesion (pairs
+    in a cohesive gap), with or without friction."""
+    from pysim.forces import HERTZ, NO_TENSION
 
     mu = 0.5 if friction else 0.0
     if law == "hooke":
         return HOOKE, contact_params(1e4, 5.0, k_t=5e3, gamma_t=1.0, mu=mu)
+    if law == "hooke_no_tension":
+        return HOOKE | NO_TENSION, contact_params(1e4, 3e3, k_t=5e3, gamma_t=1.0, mu=mu)
     return HERTZ, contact_params(1e5, 5.0, k_t=5e3, gamma_t=1.0, mu=mu, f_coh=3.0, d_coh=0.05)
 
 
 @pytest.mark.parametrize("parts", [1, 3])
-@pytest.mark.parametrize("law", ["hooke", "hertz_cohesive"])
+@pytest.mark.parametrize("law", ["hooke", "hooke_no_tension", "hertz_cohesive"])
 @pytest.mark.parametrize("friction", [False, True])
 def test_sphere_pass_equals_the_general_pass(rng, friction, law, parts):
     """The spheres-only loop (gather, SIMD laws, scatter, in chunks of listed pairs, the
@@ -433,7 +436,7 @@ def test_pairs_skipped_by_the_motion_bound_change_nothing(rng):
 
 
 @pytest.mark.parametrize("parts", [1, 3])
-@pytest.mark.parametrize("law", ["hooke", "hertz_cohesive"])
+@pytest.mark.parametrize("law", ["hooke", "hooke_no_tension", "hertz_cohesive"])
 @pytest.mark.parametrize("friction", [False, True])
 def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, parts):
     """The rods loop (gather, closest points and laws on SIMD lanes, sums in pair order,

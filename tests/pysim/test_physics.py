@@ -47,6 +47,48 @@ def test_linear_spring_dashpot_restitution_and_contact_time():
     assert tc == pytest.approx(tc_theory, rel=0.01)
 
 
+def clipped_restitution(k, gamma, m_eff):
+    """Restitution of the linear spring-dashpot clipped at zero force, from the equation
+    of motion ``m_eff delta'' = -max(0, k delta + gamma delta')`` (scipy): the contact
+    ends when the force reaches zero, before the overlap does."""
+    from scipy.integrate import solve_ivp
+
+    def force_zero(t, y):
+        return k * y[0] + gamma * y[1] if t > 0 else 1.0
+    force_zero.terminal, force_zero.direction = True, -1
+    sol = solve_ivp(lambda t, y: [y[1], -(k * y[0] + gamma * y[1]) / m_eff], (0, 1.0),
+                    [0.0, 1.0], events=force_zero, rtol=1e-12, atol=1e-14)
+    return -sol.y_events[0][0][1]
+
+
+@pytest.mark.parametrize("gamma, gain", [(30.0, 0.01), (200.0, 0.15)])
+def test_limit_damping_clips_the_pull_and_raises_the_restitution(gamma, gain):
+    """With ``limit_damping`` the dashpot never pulls: two spheres part when the force
+    reaches zero, with the restitution of the clipped equation of motion, above the
+    unclipped ``e_n`` (zeta 0.09 and 0.62: e_n 0.746 and 0.085, clipped 0.759 and
+    0.241); a sphere dropped on a plane likewise, with its full mass as ``m_eff``."""
+    k, v0 = 1e5, 0.5
+    m_eff = np.pi / 12
+    zeta = gamma / (2 * np.sqrt(m_eff * k))
+    e_free = np.exp(-np.pi * zeta / np.sqrt(1 - zeta**2))
+    e_clip = clipped_restitution(k, gamma, m_eff)
+    assert e_clip > e_free + gain
+    model = ContactModel("hooke", k, gamma, limit_damping=True)
+    sim = two_spheres(v0, model, dt=np.pi / np.sqrt(k / m_eff) / 2000)
+    _, v_rel_after = collide(sim, 20000)
+    assert v_rel_after / (2 * v0) == pytest.approx(e_clip, rel=0.01)
+    # one sphere (mass pi/6) falling at 0.5 on a plane, no gravity
+    st = State.spheres(np.array([[2.5, 2.5, 0.5 + 1e-9]]), 0.5, np.full(3, 5.0),
+                       v=np.array([[0.0, 0.0, -v0]]), periodic=(True, True, False))
+    sim = Simulation(st, model, dt=np.pi / np.sqrt(k / (2 * m_eff)) / 2000,
+                     planes=[plane((0, 0, 1), (0, 0, 0))])
+    for _ in range(20000):
+        sim.run(1)
+        if st.v[0, 2] > 0 and len(sim.wall_contact_table()[0]) == 0:
+            break
+    assert st.v[0, 2] / v0 == pytest.approx(clipped_restitution(k, gamma, 2 * m_eff), rel=0.01)
+
+
 def test_hertz_contact_time():
     """Undamped Hertz f = k delta^(3/2): energy conservation gives the maximal overlap
     delta_max = (5 m_eff v^2 / (4 k))^(2/5) and the duration

@@ -149,6 +149,19 @@ def test_bad_tapping_cases(changes, message):
     assert "\n" not in str(exc.value)
 
 
+def test_limit_damping_is_a_pysim_option():
+    from workflows.engines import supports
+
+    case = validate_case(tap_case(contact__limit_damping=True), "case.yaml")
+    assert case["contact"]["limit_damping"] is True
+    assert supports("pysim", case) is None
+    for engine in ("lammps", "liggghts"):
+        assert "contact.limit_damping is implemented on pysim only" in supports(engine, case)
+    assert supports("lammps", validate_case(tap_case(), "case.yaml")) is None
+    with pytest.raises(ConfigError, match=r"limit_damping"):
+        validate_case(tap_case(contact__limit_damping="yes"), "case.yaml")
+
+
 def test_container_only_for_tapping():
     case = copy.deepcopy(GOOD_CASE)
     case["container"] = {"shape": "cylinder", "diameter": 20.0}
