@@ -52,9 +52,14 @@ def stop_signals_raise():
 
 def check_signalled(who: str, returncode: int) -> None:
     """Raise :class:`Interrupted` when the process ``who`` ended by one of
-    :data:`STOP_SIGNALS` (a ``returncode`` of minus the signal number)."""
-    if returncode is not None and returncode < 0 and -returncode in STOP_SIGNALS:
-        raise Interrupted(-returncode, who)
+    :data:`STOP_SIGNALS`: killed by it (a ``returncode`` of minus the signal number) or
+    exiting with ``128 +`` its number after catching it, as ``python -m pysim run`` does
+    on Ctrl-C (130) and shells do."""
+    if returncode is None:
+        return
+    for s in STOP_SIGNALS:
+        if returncode in (-s, 128 + s):
+            raise Interrupted(s, who)
 
 
 def stop_process(proc: subprocess.Popen, grace: float = GRACE_SECONDS) -> None:

@@ -223,9 +223,12 @@ def test_stopped_pipeline_records_nothing_and_resumes(tmp_path):
     assert rec["status"] == "ok" and "--resume" in rec["command"]
 
 
-def test_engine_killed_by_sigterm_is_stopped_not_failed(tmp_path):
-    """A pysim process ended by SIGTERM (a kill, a batch system) makes the runner exit with
-    128 + 15 and no run.json, so the run is resumed rather than reported as failed."""
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_engine_killed_by_sigterm_is_stopped_not_failed(tmp_path, sig):
+    """A pysim process ended by SIGTERM (a kill, a batch system; it dies of it) or SIGINT
+    (Ctrl-C or a kill -INT of that process alone; pysim catches it and exits with 130)
+    makes the runner exit with 128 + the signal's number and no run.json, so the run is
+    resumed rather than reported as failed."""
     import psutil
 
     from workflows.case import validate_case
@@ -245,10 +248,10 @@ def test_engine_killed_by_sigterm_is_stopped_not_failed(tmp_path):
         time.sleep(0.05)
     children = psutil.Process(proc.pid).children()
     assert len(children) == 1 and "pysim" in " ".join(children[0].cmdline())
-    children[0].terminate()
+    children[0].send_signal(sig)
     _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 128 + signal.SIGTERM, err
-    assert "stopped: pysim got SIGTERM" in err
+    assert proc.returncode == 128 + sig, err
+    assert f"stopped: pysim got {sig.name}" in err
     assert not (out / "run.json").exists() and not (out / "failed").exists()
 
 
