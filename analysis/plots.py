@@ -326,19 +326,31 @@ def tapping_sets(table, out, labels=None):
 
     ``table``: rows ``variant, engine, observable, seed, value`` with observables
     ``phi_settled``, ``phi_late``, ``angle_settled``, ``angle_late``; ``labels``:
-    ``{variant: tick label}``."""
+    ``{variant: tick label}``. Where the table has finite ``contacts_flight`` (how far the
+    late taps lift the bed, :func:`analysis.summary.cycle_rows`), a third panel shows it."""
     variants = list(dict.fromkeys(table.variant))
     engines = [e for e in ENGINE_COLORS if e in set(table.engine)] + sorted(
         set(table.engine) - set(ENGINE_COLORS))
-    fig, axes = plt.subplots(1, 2, figsize=(max(8.0, 1.6 * len(variants) + 3), 4.2))
-    panels = [(axes[0], "phi", r"volumetric density $\phi$"),
-              (axes[1], "angle", "mean angle to the base (deg)")]
+    flight = np.isfinite(table[table.observable == "contacts_flight"].value.to_numpy(float)).any()
+    ncol = 3 if flight else 2
+    # about 1.2 in per tick label (three lines of 7-point text) in every panel
+    fig, axes = plt.subplots(1, ncol, figsize=(min(24.0, ncol * (1.2 * len(variants) + 1.0)),
+                                               4.2))
+    states = (("settled", "s", False), ("late", "o", True))
+    panels = [(axes[0], [(f"phi_{k}", k, m, f) for k, m, f in states],
+               r"volumetric density $\phi$"),
+              (axes[1], [(f"angle_{k}", k, m, f) for k, m, f in states],
+               "mean angle to the base (deg)")]
+    if flight:
+        panels.append((axes[2], [("contacts_flight", "late", "D", True)],
+                       "late taps: contacts in flight / on the base"))
     width = 0.7 / max(1, len(engines))
-    for ax, q, ylabel in panels:
+    for ax, series, ylabel in panels:
         for e_i, engine in enumerate(engines):
             color = ENGINE_COLORS.get(engine, "k")
-            for kind, marker, fill in (("settled", "s", "none"), ("late", "o", color)):
-                sub = table[(table.engine == engine) & (table.observable == f"{q}_{kind}")]
+            for observable, kind, marker, filled in series:
+                fill = color if filled else "none"
+                sub = table[(table.engine == engine) & (table.observable == observable)]
                 label = f"{engine}, {kind}"
                 for v_i, variant in enumerate(variants):
                     vals = sub[sub.variant == variant].value.dropna().to_numpy()

@@ -92,3 +92,24 @@ def test_script_writes_the_figures_and_the_table(runs, tmp_path):
     assert list(table.columns) == ["variant", "engine", "observable", "seeds", "mean", "std",
                                    "sem"]
     assert len(table) == 2 * 5  # five of the set observables in each variant's runs
+
+
+@pytest.mark.parametrize("flight, panels", [([0.4, 0.6], 3), ([np.nan, np.nan], 2)])
+def test_sets_figure_shows_how_far_the_bed_flies_when_measured(monkeypatch, tmp_path, flight,
+                                                               panels):
+    from analysis import plots
+
+    saved = {}
+    monkeypatch.setattr(plots, "_save", lambda fig, out: saved.update(fig=fig))
+    rows = []
+    for variant, cf in zip(("an3", "an6"), flight):
+        for obs, value in (("phi_settled", 0.42), ("phi_late", 0.57), ("angle_settled", 21.0),
+                           ("angle_late", 40.0), ("contacts_flight", cf)):
+            rows += [{"variant": variant, "engine": "pysim", "observable": obs, "seed": s,
+                      "value": value + 0.01 * s} for s in (1, 2)]
+    plots.tapping_sets(pd.DataFrame(rows), tmp_path / "sets.png")
+    axes = saved["fig"].axes
+    assert len(axes) == panels
+    if panels == 3:
+        assert "flight" in axes[2].get_ylabel()
+        assert len(axes[2].lines) > 0

@@ -43,7 +43,7 @@ def curves_figure(run_dirs, out: Path) -> int:
 #: what the sets figure and table show: settled and late (last eighth of the taps) state
 SET_OBSERVABLES = ["phi_settled", "phi_late", "angle_settled", "angle_late", "p2_z_late",
                    "angle_late_layer1", "angle_late_layer2", "angle_late_layer3",
-                   "angle_late_layer4"]
+                   "angle_late_layer4", "ke_cycle", "contacts_flight"]
 
 
 def set_label(case: dict) -> str:
