@@ -278,8 +278,9 @@ def tap_cycle(thermo: pd.DataFrame, start_step: int, dt: float, period: float,
     keeps a row near its nominal phase). Returns one row per bin that holds rows:
     ``phase`` (the bin's centre, in periods; 0 is the base at rest on its way up),
     ``ke`` and ``n_contacts`` (means over the bin's rows, as the thermo table has them:
-    total kinetic energy in J, contacts) and ``rows``. Thermo rows every ``s`` steps visit the phases ``k s dt / T mod
-    1`` only, so when ``s dt / T`` is a ratio of small integers few bins are sampled."""
+    total kinetic energy in J, contacts) and ``rows``. Thermo rows every ``s`` steps
+    visit the phases ``k s dt / T mod 1`` only, so when ``s dt / T`` is a ratio of small
+    integers few bins are sampled."""
     tap = (thermo.step.to_numpy() - start_step) * dt / period
     keep = tap >= first_tap
     phase = np.mod(tap[keep], 1.0)
