@@ -46,9 +46,9 @@ def supports(engine: str, case: dict) -> str | None:
     """``None`` when the engine can run the case, else the reason it cannot."""
     if engine == "pysim":
         return None
-    if case["contact"].get("limit_damping", False):
-        return (f"contact.limit_damping is implemented on pysim only (the {engine} decks do "
-                "not pass LAMMPS' limit_damping or LIGGGHTS' limitForce)")
+    if case["contact"].get("limit_damping", False) and engine == "lammps-body":
+        return ("contact.limit_damping: LAMMPS' body pair styles have no limit_damping "
+                "option; use engine 'lammps' (glued rods) or pysim")
     if case["contact"].get("spine_contact", "closest") != "closest":
         return (f"{engine} has no end-bond rod contacts (contact.spine_contact = "
                 f"{case['contact']['spine_contact']} is pysim's)")
@@ -510,7 +510,27 @@ def deck_vars_2d(case: dict) -> dict[str, str]:
 
 
 def deck_vars(case: dict, engine: str) -> dict[str, str]:
-    """``-var`` values of the case's deck (compression, tapping or deposition)."""
+    """``-var`` values of the case's deck (compression, tapping or deposition), with the
+    normal-force clip of ``contact.limit_damping`` (:func:`_clip_vars`)."""
+    return {**_deck_vars(case, engine), **_clip_vars(case, engine)}
+
+
+def _clip_vars(case: dict, engine: str) -> dict[str, str]:
+    """``contact.limit_damping`` as the decks take it: LAMMPS ``-var limit_damping 1`` (its
+    ``limit_damping`` keyword on the pair style and the walls), LIGGGHTS ``-var limit_force
+    on`` (``limitForce``); nothing when it is off, nor for the 2-D and body decks, whose
+    contact laws have no dashpot (2-D) or no clip (body styles; refused by
+    :func:`supports`)."""
+    if not case["contact"].get("limit_damping", False) or kind(case) == "2d":
+        return {}
+    if engine == "lammps":
+        return {"limit_damping": "1"}
+    if engine == "liggghts":
+        return {"limit_force": "on"}
+    return {}
+
+
+def _deck_vars(case: dict, engine: str) -> dict[str, str]:
     if case["protocol"]["name"] == "tapping":
         return liggghts_tap_vars(case) if engine == "liggghts" else tap_deck_vars(case)
     if case["protocol"]["name"] == "deposit":

@@ -51,7 +51,8 @@ DECK = Path(__file__).resolve().parents[1] / "inputs" / "lammps" / "in.rods.coll
 class Law:
     """Rods and contact law of the check, SI: ``alpha = L/D``, ``diameter`` D (m),
     ``density`` (kg/m^3), normal ``k_n`` (N/m) and ``gamma_n`` (N s/m), tangential
-    ``k_t``, ``gamma_t``, friction ``mu``, time step ``dt`` (s)."""
+    ``k_t``, ``gamma_t``, friction ``mu``, time step ``dt`` (s); ``limit_damping``: the
+    normal force is clipped at zero (the case's ``contact.limit_damping``)."""
 
     alpha: float
     diameter: float
@@ -62,6 +63,7 @@ class Law:
     gamma_t: float
     mu: float
     dt: float
+    limit_damping: bool = False
 
     @property
     def mass(self) -> float:
@@ -84,18 +86,32 @@ def law_from_case(case: dict) -> Law:
     return Law(alpha=p["aspect_ratio"], diameter=p["diameter"]["mean"], density=p["density"],
                k_n=c["k_n"], gamma_n=c.get("gamma_n", 0.0), k_t=c.get("k_t", 0.0),
                gamma_t=c.get("gamma_t", 0.0), mu=c.get("friction", 0.0),
-               dt=case["protocol"]["dt"])
+               dt=case["protocol"]["dt"], limit_damping=bool(c.get("limit_damping", False)))
 
 
-def linear_restitution(k_n: float, gamma_n: float, m_eff: float) -> float:
+def linear_restitution(k_n: float, gamma_n: float, m_eff: float,
+                       clipped: bool = False) -> float:
     """Restitution of the linear spring-dashpot (science.md section 3):
     ``e = exp(-pi zeta / sqrt(1 - zeta^2))``, ``zeta = gamma_n / (2 sqrt(m_eff k_n))``;
-    0 when overdamped (``zeta >= 1``: no rebound). SI or any consistent units."""
+    0 when overdamped (``zeta >= 1``: no rebound). SI or any consistent units.
+
+    ``clipped``: the normal force ``max(0, k_n delta + gamma_n d(delta)/dt)`` (LAMMPS'
+    ``limit_damping``). The grains part when the force reaches zero, at the phase
+    ``pi - 2 asin(zeta)`` of the damped oscillation, where the overlap's rate is
+    ``-v0 exp(-zeta theta / sqrt(1 - zeta^2))``: ``e = exp(-2 zeta acos(zeta) /
+    sqrt(1 - zeta^2))`` for ``zeta < 1``, ``exp(-2)`` at 1 and ``exp(-2 zeta
+    acosh(zeta) / sqrt(zeta^2 - 1))`` above (the same expression continued)."""
     if not k_n > 0 or not m_eff > 0 or gamma_n < 0:
         raise ValueError(f"need k_n > 0, m_eff > 0, gamma_n >= 0; got k_n = {k_n}, "
                          f"m_eff = {m_eff}, gamma_n = {gamma_n}")
     zeta = gamma_n / (2.0 * math.sqrt(m_eff * k_n))
-    return 0.0 if zeta >= 1.0 else math.exp(-math.pi * zeta / math.sqrt(1.0 - zeta**2))
+    if not clipped:
+        return 0.0 if zeta >= 1.0 else math.exp(-math.pi * zeta / math.sqrt(1.0 - zeta**2))
+    if zeta < 1.0:
+        return math.exp(-2.0 * zeta * math.acos(zeta) / math.sqrt(1.0 - zeta**2))
+    if zeta == 1.0:
+        return math.exp(-2.0)
+    return math.exp(-2.0 * zeta * math.acosh(zeta) / math.sqrt(zeta**2 - 1.0))
 
 
 def expected_restitution(law: Law, contacts: int = 1) -> float:
@@ -104,7 +120,8 @@ def expected_restitution(law: Law, contacts: int = 1) -> float:
     ``contacts gamma_n`` (the damping ratio grows as ``sqrt(contacts)``)."""
     if contacts < 1:
         raise ValueError(f"contacts must be >= 1, got {contacts}")
-    return linear_restitution(contacts * law.k_n, contacts * law.gamma_n, 0.5 * law.mass)
+    return linear_restitution(contacts * law.k_n, contacts * law.gamma_n, 0.5 * law.mass,
+                              clipped=law.limit_damping)
 
 
 def _steps(law: Law, v_rel: float) -> int:
@@ -137,7 +154,7 @@ def run_pysim(name: str, law: Law, v_rel: float = V_REL) -> dict:
     st = State.create(x + box / 2, d / 2, law.alpha * d, box, axis=u, v=v,
                       density=law.density, periodic=(False, False, False))
     model = ContactModel("hooke", law.k_n, law.gamma_n, k_t=law.k_t, gamma_t=law.gamma_t,
-                         mu=law.mu)
+                         mu=law.mu, limit_damping=law.limit_damping)
     sim = Simulation(st, model, dt=law.dt)
     dy, dvy, nc = [], [], []
     for _ in range(_steps(law, v_rel)):
@@ -168,7 +185,8 @@ def run_lammps(name: str, law: Law, spacing: float, work: Path, v_rel: float = V
              "gamma_n": law.gamma_n, "k_t": law.k_t,
              "x_gamma_t": law.gamma_t / law.gamma_n if law.gamma_n > 0 else 0.0,
              "mu": law.mu, "v_rel": v_rel, "dt": law.dt, "steps": _steps(law, v_rel),
-             "skin": 0.2 * d, "ghost_cut": (law.alpha + 1.4) * d}
+             "skin": 0.2 * d, "ghost_cut": (law.alpha + 1.4) * d,
+             "limit_damping": int(law.limit_damping)}
     cmd = [venv_bin("lmp"), "-in", str(DECK), "-log", str(log), "-screen", "none"]
     for key, val in vars_.items():
         cmd += ["-var", key, repr(val) if isinstance(val, float) else str(val)]

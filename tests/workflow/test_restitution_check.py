@@ -80,3 +80,34 @@ def test_glued_rods_tip_to_tip_agree(law, tmp_path):
     lmp = df[df.engine == "lammps"]
     assert list(lmp.spacing) == [0.5, 0.25] and (lmp.contacts == 1).all()
     assert (abs(lmp.e - e_pysim) < 0.1).all() and (df.verdict == "agree").all()
+
+
+@pytest.mark.parametrize("zeta", [0.05, 0.28, 0.59, 0.95, 1.0, 1.4, 3.0])
+def test_clipped_restitution_solves_the_clipped_equation_of_motion(zeta):
+    """The closed form of :func:`linear_restitution` with ``clipped`` against scipy's
+    solution of ``m delta'' = -max(0, k delta + gamma delta')``, over- and underdamped;
+    it is never below the unclipped value."""
+    from tests.pysim.test_physics import clipped_restitution
+
+    k, m_eff = 19.5, 1.7e-6
+    gamma = 2 * zeta * math.sqrt(m_eff * k)
+    e = rc.linear_restitution(k, gamma, m_eff, clipped=True)
+    assert e == pytest.approx(clipped_restitution(k, gamma, m_eff), rel=1e-7)
+    assert e >= rc.linear_restitution(k, gamma, m_eff)
+
+
+@pytest.mark.engines
+@needs_lammps
+def test_glued_rods_with_limit_damping_agree_tip_to_tip(tmp_path):
+    """``contact.limit_damping`` reaches LAMMPS' collision deck: at e_n 0.1 (an3) one
+    clipped contact rebounds with 0.25, not 0.1, on both engines alike."""
+    case = validate_case(deep_merge(TAP, {"particles": {"aspect_ratio": 4.0},
+                                          "contact": {"restitution": 0.1,
+                                                      "limit_damping": True}}))
+    clipped = rc.law_from_case(case)
+    assert clipped.limit_damping
+    df = rc.check(clipped, tmp_path, geometries=("tip_tip",), spacings=(0.5,))
+    e = df.set_index("engine").e
+    assert e["lammps"] == pytest.approx(e["pysim"], rel=1e-6)
+    assert e["pysim"] == pytest.approx(rc.expected_restitution(clipped), rel=0.02)
+    assert rc.expected_restitution(clipped) == pytest.approx(0.2527, abs=1e-4)

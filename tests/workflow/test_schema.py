@@ -149,15 +149,21 @@ def test_bad_tapping_cases(changes, message):
     assert "\n" not in str(exc.value)
 
 
-def test_limit_damping_is_a_pysim_option():
-    from workflows.engines import supports
+def test_limit_damping_reaches_every_engines_deck():
+    """The clip is pysim's kernel flag, LAMMPS' ``limit_damping`` keyword and LIGGGHTS'
+    ``limitForce`` option; LAMMPS' body styles have none and refuse the case."""
+    from workflows.engines import deck_vars, supports
 
     case = validate_case(tap_case(contact__limit_damping=True), "case.yaml")
     assert case["contact"]["limit_damping"] is True
-    assert supports("pysim", case) is None
-    for engine in ("lammps", "liggghts"):
-        assert "contact.limit_damping is implemented on pysim only" in supports(engine, case)
-    assert supports("lammps", validate_case(tap_case(), "case.yaml")) is None
+    for engine in ("pysim", "lammps", "liggghts"):
+        assert supports(engine, case) is None
+    assert deck_vars(case, "lammps")["limit_damping"] == "1"
+    assert deck_vars(case, "liggghts")["limit_force"] == "on"
+    plain = validate_case(tap_case(), "case.yaml")
+    assert "limit_damping" not in deck_vars(plain, "lammps")  # the decks' default: off
+    assert "limit_force" not in deck_vars(plain, "liggghts")
+    assert "no limit_damping option" in supports("lammps-body", case)
     with pytest.raises(ConfigError, match=r"limit_damping"):
         validate_case(tap_case(contact__limit_damping="yes"), "case.yaml")
 
