@@ -113,3 +113,19 @@ def test_sets_figure_shows_how_far_the_bed_flies_when_measured(monkeypatch, tmp_
     if panels == 3:
         assert "flight" in axes[2].get_ylabel()
         assert len(axes[2].lines) > 0
+
+
+def test_set_labels_name_a_changed_tangential_law_and_the_clip():
+    """Sets told apart by their tangential law or by ``limit_damping`` get a third line;
+    a set with the tangential law the schema derives gets none."""
+    from workflows.case import deep_merge, validate_case
+    from workflows.scripts.plot_tapping import set_label
+
+    plain = validate_case(TAP)
+    assert set_label(plain) == "e_n 0.4, Gamma 2\nalpha 2, N 30"
+    c = plain["contact"]
+    swapped = validate_case(deep_merge(TAP, {"contact": {"k_t": 1.5 * c["k_t"],
+                                                         "gamma_t": 0.4 * c["gamma_t"]}}))
+    assert set_label(swapped).endswith("\nk_t x1.5, \u03b3_t x0.4")
+    clipped = validate_case(deep_merge(TAP, {"contact": {"limit_damping": True}}))
+    assert set_label(clipped).endswith("\nf_n >= 0")

@@ -47,10 +47,24 @@ SET_OBSERVABLES = ["phi_settled", "phi_late", "angle_settled", "angle_late", "p2
 
 
 def set_label(case: dict) -> str:
-    """Tick label of a parameter set: its restitution, intensity, aspect ratio and N."""
-    return (f"e_n {case['contact'].get('restitution', float('nan')):g}, "
-            f"Gamma {case['protocol']['intensity']:g}\n"
-            f"alpha {case['particles']['aspect_ratio']:g}, N {case['particles']['n']}")
+    """Tick label of a parameter set: its restitution, intensity, aspect ratio and N, and a
+    third line for what else sets it apart: a tangential law other than the one the
+    schema derives from the normal law (``k_t = 2/7 k_n``, ``gamma_t = gamma_n / 2``),
+    given as ratios to those, and ``f_n >= 0`` for ``contact.limit_damping``."""
+    c = case["contact"]
+    label = (f"e_n {c.get('restitution', float('nan')):g}, "
+             f"Gamma {case['protocol']['intensity']:g}\n"
+             f"alpha {case['particles']['aspect_ratio']:g}, N {case['particles']['n']}")
+    extra = []
+    k_n, gamma_n = c.get("k_n", 0.0), c.get("gamma_n", 0.0)
+    if c.get("friction", 0.0) > 0 and k_n > 0 and gamma_n > 0:
+        xk = c.get("k_t", 0.0) / (2.0 / 7.0 * k_n)
+        xg = c.get("gamma_t", 0.0) / (0.5 * gamma_n)
+        if abs(xk - 1.0) > 1e-6 or abs(xg - 1.0) > 1e-6:
+            extra.append(f"k_t x{xk:.2g}, \u03b3_t x{xg:.2g}")
+    if c.get("limit_damping", False):
+        extra.append("f_n >= 0")
+    return label + ("\n" + ", ".join(extra) if extra else "")
 
 
 def sets_table(run_dirs) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
