@@ -331,6 +331,12 @@ def restitution_law(e_n: float, t_c: float, m_eff: float) -> tuple[float, float]
     return m_eff * w0**2, 2.0 * zeta * m_eff * w0
 
 
+#: the tangential law derived from a restitution law when the case gives none:
+#: ``k_t = 2/7 k_n``, ``gamma_t = gamma_n / 2``
+KT_PER_KN = 2.0 / 7.0
+GT_PER_GN = 0.5
+
+
 def _derive_contact(case: dict, source: str, at: str):
     """Fill ``k_n`` and ``gamma_n`` (and, with friction, ``k_t``/``gamma_t`` defaults) from
     ``restitution`` and ``contact_time``; a case that gives both forms must agree."""
@@ -352,8 +358,8 @@ def _derive_contact(case: dict, source: str, at: str):
     k_n, gamma_n = restitution_law(c["restitution"], c["contact_time"], 0.5 * m)
     derived = {"k_n": k_n, "gamma_n": gamma_n}
     if c.get("friction", 0.0) > 0:
-        derived["k_t"] = c["k_t"] if c.get("k_t", 0.0) > 0 else 2.0 / 7.0 * k_n
-        derived["gamma_t"] = c["gamma_t"] if c.get("gamma_t", 0.0) > 0 else 0.5 * gamma_n
+        derived["k_t"] = c["k_t"] if c.get("k_t", 0.0) > 0 else KT_PER_KN * k_n
+        derived["gamma_t"] = c["gamma_t"] if c.get("gamma_t", 0.0) > 0 else GT_PER_GN * gamma_n
     for key in ("k_n", "gamma_n"):
         given = c.get(key)
         if key == "gamma_n" and given == 0.0 and "k_n" not in c:

@@ -15,7 +15,7 @@ import pandas as pd
 from analysis import plots, theory
 from analysis.io import read_particle_frames
 from pysim.io import atomic_write_text
-from workflows.case import ConfigError, load_case
+from workflows.case import GT_PER_GN, KT_PER_KN, ConfigError, load_case
 from workflows.runner import ok_runs
 
 
@@ -58,8 +58,8 @@ def set_label(case: dict) -> str:
     extra = []
     k_n, gamma_n = c.get("k_n", 0.0), c.get("gamma_n", 0.0)
     if c.get("friction", 0.0) > 0 and k_n > 0 and gamma_n > 0:
-        xk = c.get("k_t", 0.0) / (2.0 / 7.0 * k_n)
-        xg = c.get("gamma_t", 0.0) / (0.5 * gamma_n)
+        xk = c.get("k_t", 0.0) / (KT_PER_KN * k_n)
+        xg = c.get("gamma_t", 0.0) / (GT_PER_GN * gamma_n)
         if abs(xk - 1.0) > 1e-6 or abs(xg - 1.0) > 1e-6:
             extra.append(f"k_t x{xk:.2g}, \u03b3_t x{xg:.2g}")
     if c.get("limit_damping", False):
