@@ -124,8 +124,12 @@ def simulation_from_case(case: dict, init: dict) -> Simulation:
                       max_overlap=max_overlap(case))
 
 
-def _set_stage(sim: Simulation, tp: TapPlan, drag: tuple[float, float]):
-    """Drag and base motion for the stage the current step is in (idempotent)."""
+def set_stage(sim: Simulation, tp: TapPlan, drag: tuple[float, float]):
+    """Set the settling drag ``(gamma, gamma_rot)`` (N s/m, N m s) before
+    ``tp.settle_steps`` and none after, and the base oscillation
+    ``z_b = a sin(omega (t - t0))`` from ``tp.start`` on, for the stage the current step
+    is in. Idempotent: call it after every stretch of ``sim.run`` that may cross a stage
+    boundary (``run`` cuts its stretches there)."""
     step = sim.state.step
     sim.set_drag(*(drag if step < tp.settle_steps else (0.0, 0.0)))
     if step >= tp.start:
@@ -160,7 +164,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     bar = tqdm(total=tp.end, initial=s.step, disable=not progress, unit="step", mininterval=1.0,
                desc="pysim tapping", dynamic_ncols=True)
     try:
-        _set_stage(sim, tp, drag)
+        set_stage(sim, tp, drag)
         if not resume:
             files.checkpoint(sim)
         while s.step < tp.end:
@@ -176,7 +180,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
             if before >= tp.start:
                 tap_wall += time.perf_counter() - tick
             bar.update(s.step - before)
-            _set_stage(sim, tp, drag)
+            set_stage(sim, tp, drag)
             if s.step % thermo_every == 0:
                 th = sim.thermo()
                 files.thermo((th.step, th.time, math.nan, math.nan, th.ke, th.pe, th.n_contacts))

@@ -51,9 +51,9 @@ def trajectories(case: dict, init: dict, dts, taps: int, log=print) -> pd.DataFr
         sim = tap.simulation_from_case(case, init)
         drag = tap.settle_drag(case)
         for stop in (tp.settle_steps, tp.start):
-            tap._set_stage(sim, tp, drag)
+            tap.set_stage(sim, tp, drag)
             sim.run(stop - sim.state.step)
-        tap._set_stage(sim, tp, drag)
+        tap.set_stage(sim, tp, drag)
         sim.dt = dt  # the base moves with the time, so it continues at its phase
         sub = int(round(tp.period / dt)) // SAMPLES
         rows = []
