@@ -35,6 +35,7 @@ from tqdm import tqdm
 
 from pysim import io, walls
 from pysim.protocols.compress import max_overlap, model_from_case
+from pysim.protocols.deposit import grain_mass
 from pysim.protocols.output import RunFiles
 from pysim.simulation import BlowUpError, Simulation
 from pysim.state import State
@@ -96,10 +97,8 @@ def settle_drag(case: dict) -> tuple[float, float]:
     """``(gamma_bg, gamma_rot)`` of the settling stage: ``m g / v_s`` for the mean grain
     and ``gamma_bg L^2 / 12``."""
     p = case["particles"]
-    d = p["diameter"]["mean"]
-    length = p.get("aspect_ratio", 0.0) * d
-    m = p.get("density", 1.0) * (math.pi * d * d * length / 4 + math.pi * d**3 / 6)
-    gamma = m * case["gravity"] / case["protocol"].get("settle_speed", 0.2)
+    length = p.get("aspect_ratio", 0.0) * p["diameter"]["mean"]
+    gamma = grain_mass(case) * case["gravity"] / case["protocol"].get("settle_speed", 0.2)
     return gamma, gamma * length**2 / 12.0
 
 

@@ -35,15 +35,12 @@ def trajectories(case: dict, init: dict, dts, taps: int, log=print) -> pd.DataFr
     """Rows ``dt, tap, phase, ke_mgd, contacts`` of ``taps`` taps at each time step in
     ``dts``, each from the bed settled and relaxed at the case's ``protocol.dt``."""
     from pysim.protocols import tapping as tap
-    from workflows.case import particle_measure
+    from pysim.protocols.deposit import grain_mass
 
     if taps < 1:
         raise ValueError(f"taps must be >= 1, got {taps}")
     tp = tap.plan(case["protocol"], case["gravity"])
-    p = case["particles"]
-    d = p["diameter"]["mean"]
-    m = p.get("density", 1.0) * particle_measure(d, p["aspect_ratio"], 3)
-    mgd = m * case["gravity"] * d
+    mgd = grain_mass(case) * case["gravity"] * case["particles"]["diameter"]["mean"]
     frames = []
     for dt in dts:
         if not 0 < dt <= tp.period / SAMPLES:
