@@ -226,12 +226,12 @@ def _no_reaction(q, fj):
 
 
 @inline_njit
-def _reaction(j, solo, hp, shared, f, torque, F0, F1, F2, u0, u1, u2):
+def _reaction(j, solo, own, f, torque, F0, F1, F2, u0, u1, u2):
     """The reaction of a pair on its second particle ``j`` (force ``-F``, torque ``u``):
-    added to ``f_j`` at once in the ``solo`` part or when ``j`` is in this part (below
-    ``hp``) and not ``shared`` (returns True); else it is left for :func:`_store_chunk`
-    (returns False)."""
-    if solo or (j < hp and not shared[np.uint64(j)]):
+    added to ``f_j`` at once in the ``solo`` part or when ``own[j]`` (``j`` receives
+    reactions from its own part only, :func:`_own_flags`; returns True); else it is left
+    for :func:`_store_chunk` (returns False)."""
+    if solo or own[np.uint64(j)]:
         ju = np.uint64(j)
         f[ju, 0] -= F0
         f[ju, 1] -= F1
@@ -244,17 +244,16 @@ def _reaction(j, solo, hp, shared, f, torque, F0, F1, F2, u0, u1, u2):
 
 
 @njit
-def _store_chunk(pj, jstart, jk, fj, X, cap, fo, uo, torques, kin, mi):
+def _store_chunk(pj, jstart, jk, fj, X, cap, fo, uo, torques, kin, kl, nl):
     """Store in their slots (:func:`_slot`) the reactions that :func:`_reaction` left
-    out, for :func:`_close_part`: the pairs in reach of a chunk are ``kin[:mi]``, marked
-    ``-1 - k`` when left out; their force on i is in rows ``fo:fo+3`` of the chunk's
-    scratch ``X`` (``cap`` values per row) and, with ``torques``, their torque on j in
-    rows ``uo:uo+3``. The slots of pairs out of reach stay zero (:func:`_close_part`
+    out, for :func:`_close_part`: the pairs in reach of a chunk are ``kin``, those left
+    out are the columns ``kl[:nl]``; their force on i is in rows ``fo:fo+3`` of the
+    chunk's scratch ``X`` (``cap`` values per row) and, with ``torques``, their torque on
+    j in rows ``uo:uo+3``. The slots of pairs out of reach stay zero (:func:`_close_part`
     leaves every slot it reads at zero)."""
-    for m in range(mi):
-        if kin[m] >= 0:
-            continue
-        k = -1 - kin[m]
+    for q in range(nl):
+        m = kl[q]
+        k = kin[m]
         u0 = 0.0
         u1 = 0.0
         u2 = 0.0
@@ -424,7 +423,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
                 q1 += t1
                 q2 += t2
                 if scatter:
-                    _reaction(j, True, 0, no_parts, f, torque, F0, F1, F2, r0, r1, r2)
+                    _reaction(j, True, no_parts, f, torque, F0, F1, F2, r0, r1, r2)
                 else:
                     _store(_slot(k, j, jstart, jk), fj, F0, F1, F2, r0, r1, r2)
                 if stats:
@@ -635,19 +634,20 @@ def _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
 
 @njit
 def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, stats, blk,
-                    b, S, kk, mc, solo, hp, shared, s0, s1, s2, q0, q1, q2):
+                    b, S, kk, mc, solo, own, kl, s0, s1, s2, q0, q1, q2):
     """Add the forces of the ``mc`` pairs in reach of the chunk ``k0:k1`` in pair order, as
     :func:`pair_pass` does, and store their springs. ``i`` is the row of pair ``k0``, ``s``
     and ``q`` its partial force and torque sums; rows (of block ``b``, up to ``hi``) that
     end within the chunk are completed (:func:`_finish_row`). The reaction on ``j`` is
-    added to ``f_j`` at once in the ``solo`` part or when ``j`` is in this part (below
-    ``hp``) and not ``shared``, else stored after the chunk (:func:`_store_chunk`). Adds
+    added to ``f_j`` at once in the ``solo`` part or when ``own[j]`` (:func:`_open_part`),
+    else stored after the chunk (:func:`_store_chunk`). Adds
     the block's energy, contacts and virial to ``blk[b]``. Returns the row and partial sums
-    after the chunk."""
+    after the chunk, and the number of reactions left out (their columns in ``kl``)."""
+    nl = 0
     for m in range(mc):
         k = kk[m]
         while istart[i + 1] <= k:
-            _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or not shared[i])
+            _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or own[i])
             s0 = 0.0
             s1 = 0.0
             s2 = 0.0
@@ -680,8 +680,9 @@ def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torqu
         q0 += t0
         q1 += t1
         q2 += t2
-        if not _reaction(pj[k], solo, hp, shared, f, torque, F0, F1, F2, u0, u1, u2):
-            kk[m] = -1 - k
+        if not _reaction(pj[k], solo, own, f, torque, F0, F1, F2, u0, u1, u2):
+            kl[nl] = m
+            nl += 1
         if stats:
             delta = S[_DELTA * CAP + m]
             if delta > 0.0:
@@ -701,7 +702,7 @@ def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torqu
             blk[b, 9] += d2 * F1
             blk[b, 10] += d2 * F2
     while i < hi and istart[i + 1] <= k1:  # the rows that end with the chunk
-        _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or not shared[i])
+        _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or own[i])
         s0 = 0.0
         s1 = 0.0
         s2 = 0.0
@@ -709,24 +710,23 @@ def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torqu
         q1 = 0.0
         q2 = 0.0
         i += 1
-    return i, s0, s1, s2, q0, q1, q2
+    return i, s0, s1, s2, q0, q1, q2, nl
 
 
 @njit
 def _sphere_part(bl, bh, nt, x, v, omega, radius, b0, b1, b2, p0, p1, p2, pi, pj, istart,
                  jstart, jk, hist, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt, f, torque,
-                 fj, stats, blk, shared):
+                 fj, stats, blk, own):
     """The part of :func:`sphere_pass` on blocks ``bl:bh`` (of ``nt`` parts). With one part
     the scatter is called with ``solo`` a constant, so that it compiles without the
     per-pair test of the shared particles: the pass took 1.32 ms with the flag a variable
     (True at run time) and 1.06 ms with the constant (10^4 spheres with friction, one
     thread)."""
     n = x.shape[0]
-    hp = min(n, bh * BLOCK)
-    _open_part(bl * BLOCK, hp, pi, jstart, jk, f, torque, shared)
     S = np.zeros(_NS * CAP)  # zeros: the padding columns never hold garbage
     kk = np.empty(CAP, np.int64)
     ko = np.empty(CAP, np.int64)
+    kl = np.empty(CAP, np.int64)
     for b in range(bl, bh):
         lo = b * BLOCK
         hi = min(n, lo + BLOCK)
@@ -745,14 +745,19 @@ def _sphere_part(bl, bh, nt, x, v, omega, radius, b0, b1, b2, p0, p1, p2, pi, pj
                                 p2, hist, dcoh, friction, S, kk, ko)
             _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt)
             if nt == 1:  # a constant: the one-part scatter compiles apart (0.8x the time)
-                i, s0, s1, s2, q0, q1, q2 = _sphere_scatter(
+                i, s0, s1, s2, q0, q1, q2, nl = _sphere_scatter(
                     k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, stats, blk,
-                    b, S, kk, mc, True, hp, shared, s0, s1, s2, q0, q1, q2)
-            else:
-                i, s0, s1, s2, q0, q1, q2 = _sphere_scatter(
-                    k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, stats, blk,
-                    b, S, kk, mc, False, hp, shared, s0, s1, s2, q0, q1, q2)
-                _store_chunk(pj, jstart, jk, fj, S, CAP, _F, _U, friction, kk, mc)
+                    b, S, kk, mc, True, own, kl, s0, s1, s2, q0, q1, q2)
+            else:  # stats a constant too (two parts, one thread: 0.93x the time)
+                if stats:
+                    i, s0, s1, s2, q0, q1, q2, nl = _sphere_scatter(
+                        k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, True,
+                        blk, b, S, kk, mc, False, own, kl, s0, s1, s2, q0, q1, q2)
+                else:
+                    i, s0, s1, s2, q0, q1, q2, nl = _sphere_scatter(
+                        k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, False,
+                        blk, b, S, kk, mc, False, own, kl, s0, s1, s2, q0, q1, q2)
+                _store_chunk(pj, jstart, jk, fj, S, CAP, _F, _U, friction, kk, kl, nl)
             k0 = k1
             if k0 >= k_end:
                 break
@@ -776,7 +781,10 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, 
     also receives reactions from an earlier part (``shared``): those reactions are
     stored per pair (after each chunk, :func:`_store_chunk`, in the pair's slot,
     :func:`_slot`) and summed from zero in pair order after the parts
-    (:func:`_close_part`). Either way ``f_i = row sum + reaction sum`` in pair order, so
+    (:func:`_close_part`). Which particles those are is found before the parts run
+    (:func:`_open_parts`), so that the scatter tests one flag per pair (testing
+    ``j`` against the part's end and a flag took 1.5 ms per pass on two parts, one
+    thread, against 1.1 with one part). Either way ``f_i = row sum + reaction sum`` in pair order, so
     any number of parts gives the same bits; with spatially sorted particles few are
     shared, and the threads touch no more memory than one thread does. With more than
     one part the slots of the shared particles in ``fj`` must hold zero on entry
@@ -796,15 +804,15 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, 
     blk = np.zeros((nb if stats else 0, _STATS))
     nt = max(1, parts)
     bounds = part_bounds(istart, nb, nt)
-    shared = np.empty(n if nt > 1 else 0, np.bool_)  # read only with parts
+    own = _open_parts(bounds, pi, jstart, jk, f, torque)
     for t in prange(nt):
         _sphere_part(bounds[t], bounds[t + 1], nt, x, v, omega, radius, b0, b1, b2, p0, p1, p2,
                      pi, pj, istart, jstart, jk, hist, law, kn, gn, kt, gt, mu, fcoh, dcoh,
-                     friction, dt, f, torque, fj, stats, blk, shared)
+                     friction, dt, f, torque, fj, stats, blk, own)
     if nt > 1:
         for t in prange(nt):
             _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, fj, f, torque,
-                        shared)
+                        own)
     if stats:
         return block_totals(blk, virial)
     return 0.0, 0
@@ -1015,13 +1023,14 @@ def _rod_laws(R, mr, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
 
 @njit
 def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, stats, blk, b, R, kr, mr,
-                 kb, mo, solo, hp, shared, s0, s1, s2, q0, q1, q2):
+                 kb, mo, solo, own, kl, s0, s1, s2, q0, q1, q2):
     """As :func:`_sphere_scatter` for the pairs in reach of ``R``: row sums, reactions
     (added to j, or left to :func:`_store_chunk`), springs, and the block's energy,
     contacts and virial; zero the spring of the pairs ``kb`` out of reach. Returns the
     row and partial sums after the chunk. Kept apart from :func:`_sphere_scatter`, not
     one function with the scratch layout as arguments: with runtime row offsets the
     sphere steps took 2-3 % longer (measured)."""
+    nl = 0
     for q in range(mo):
         k = kb[q]
         if friction:
@@ -1031,7 +1040,7 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, stats, blk, b
     for m in range(mr):
         k = kr[m]
         while istart[i + 1] <= k:
-            _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or not shared[i])
+            _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or own[i])
             s0 = 0.0
             s1 = 0.0
             s2 = 0.0
@@ -1055,8 +1064,9 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, stats, blk, b
         q0 += R[_RT * RCAP + m]
         q1 += R[(_RT + 1) * RCAP + m]
         q2 += R[(_RT + 2) * RCAP + m]
-        if not _reaction(pj[k], solo, hp, shared, f, torque, F0, F1, F2, r0, r1, r2):
-            kr[m] = -1 - k
+        if not _reaction(pj[k], solo, own, f, torque, F0, F1, F2, r0, r1, r2):
+            kl[nl] = m
+            nl += 1
         if stats:
             blk[b, 0] += R[_RPE * RCAP + m]
             blk[b, 1] += 1.0
@@ -1073,7 +1083,7 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, stats, blk, b
             blk[b, 9] += d2 * F1
             blk[b, 10] += d2 * F2
     while i < hi and istart[i + 1] <= k1:  # the rows that end with the chunk
-        _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or not shared[i])
+        _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or own[i])
         s0 = 0.0
         s1 = 0.0
         s2 = 0.0
@@ -1081,24 +1091,23 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, stats, blk, b
         q1 = 0.0
         q2 = 0.0
         i += 1
-    return i, s0, s1, s2, q0, q1, q2
+    return i, s0, s1, s2, q0, q1, q2, nl
 
 
 @njit
 def _rod_part(bl, bh, nt, x, v, omega, u, radius, half, b0, b1, b2, p0, p1, p2, pi, pj, istart,
               jstart, jk, hist, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt, f, torque, fj,
-              stats, blk, shared, use_sep, sep_sigma, sep_shrink):
+              stats, blk, own, use_sep, sep_sigma, sep_shrink):
     """The part of :func:`rod_pass` on blocks ``bl:bh`` (of ``nt`` parts); the one-part
     scatter compiles apart as in :func:`_sphere_part` (a step of 2000 rods, one thread:
     0.416 ms before, 0.397 after)."""
     n = x.shape[0]
-    hp = min(n, bh * BLOCK)
-    _open_part(bl * BLOCK, hp, pi, jstart, jk, f, torque, shared)
     A = np.zeros(_NA * RCAP)
     R = np.zeros(_NR * RCAP)  # zeros: the padding columns never hold garbage
     ka = np.empty(RCAP, np.int64)
     kb = np.empty(RCAP, np.int64)
     kr = np.empty(RCAP, np.int64)
+    kl = np.empty(RCAP, np.int64)
     for b in range(bl, bh):
         lo = b * BLOCK
         hi = min(n, lo + BLOCK)
@@ -1120,14 +1129,19 @@ def _rod_part(bl, bh, nt, x, v, omega, u, radius, half, b0, b1, b2, p0, p1, p2, 
                                  friction, R, kr)
             _rod_laws(R, mr, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt)
             if nt == 1:  # a constant, as in _sphere_part
-                i, s0, s1, s2, q0, q1, q2 = _rod_scatter(
+                i, s0, s1, s2, q0, q1, q2, nl = _rod_scatter(
                     k1, i, hi, pj, istart, hist, friction, f, torque, stats, blk, b, R, kr, mr,
-                    kb, mo, True, hp, shared, s0, s1, s2, q0, q1, q2)
+                    kb, mo, True, own, kl, s0, s1, s2, q0, q1, q2)
             else:
-                i, s0, s1, s2, q0, q1, q2 = _rod_scatter(
-                    k1, i, hi, pj, istart, hist, friction, f, torque, stats, blk, b, R, kr, mr,
-                    kb, mo, False, hp, shared, s0, s1, s2, q0, q1, q2)
-                _store_chunk(pj, jstart, jk, fj, R, RCAP, _RF, _RU, True, kr, mr)
+                if stats:
+                    i, s0, s1, s2, q0, q1, q2, nl = _rod_scatter(
+                        k1, i, hi, pj, istart, hist, friction, f, torque, True, blk, b, R, kr,
+                        mr, kb, mo, False, own, kl, s0, s1, s2, q0, q1, q2)
+                else:
+                    i, s0, s1, s2, q0, q1, q2, nl = _rod_scatter(
+                        k1, i, hi, pj, istart, hist, friction, f, torque, False, blk, b, R, kr,
+                        mr, kb, mo, False, own, kl, s0, s1, s2, q0, q1, q2)
+                _store_chunk(pj, jstart, jk, fj, R, RCAP, _RF, _RU, True, kr, kl, nl)
             k0 = k1
             if k0 >= k_end:
                 break
@@ -1155,16 +1169,16 @@ def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart
     blk = np.zeros((nb if stats else 0, _STATS))
     nt = max(1, parts)
     bounds = part_bounds(istart, nb, nt)
-    shared = np.empty(n if nt > 1 else 0, np.bool_)  # read only with parts
+    own = _open_parts(bounds, pi, jstart, jk, f, torque)
     for t in prange(nt):
         _rod_part(bounds[t], bounds[t + 1], nt, x, v, omega, u, radius, half, b0, b1, b2, p0, p1,
                   p2, pi, pj, istart, jstart, jk, hist, law, kn, gn, kt, gt, mu, fcoh, dcoh,
-                  friction, dt, f, torque, fj, stats, blk, shared, use_sep, sep_sigma,
+                  friction, dt, f, torque, fj, stats, blk, own, use_sep, sep_sigma,
                   sep_shrink)
     if nt > 1:
         for t in prange(nt):
             _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, fj, f, torque,
-                        shared)
+                        own)
     if stats:
         return block_totals(blk, virial)
     return 0.0, 0
@@ -1198,22 +1212,37 @@ def part_bounds(istart, nb, nparts):
 
 
 @njit
-def _open_part(lo, hi, pi, jstart, jk, f, torque, shared):
+def _open_part(lo, hi, pi, jstart, jk, f, torque, own):
     """Start the part of rows ``lo:hi``: zero their forces and torques, and mark as
-    ``shared`` the particles that are the second member of a pair whose row lies before
-    ``lo`` (in another part). The reactions on a shared particle are stored per pair
-    (``fj``) and added by :func:`_close_part`; the others are added at once."""
+    ``own`` the particles that are not the second member of a pair whose row lies before
+    ``lo`` (in another part): their reactions all come from this part and are added at
+    once. The reactions on the others ("shared") are stored per pair (``fj``) and added
+    by :func:`_close_part`."""
     for i in range(lo, hi):
         for c in range(3):
             f[i, c] = 0.0
             torque[i, c] = 0.0
-    if shared.shape[0] == 0:  # one part: nothing shared
-        return
-    if lo == 0:  # the first part: no rows before it
-        shared[lo:hi] = False
+    if own.shape[0] == 0:  # one part: nothing shared
         return
     for i in range(lo, hi):
-        shared[i] = _is_shared(i, lo, pi, jstart, jk)
+        own[i] = lo == 0 or not _is_shared(i, lo, pi, jstart, jk)
+
+
+@pnjit
+def _open_parts(bounds, pi, jstart, jk, f, torque):
+    """:func:`_open_part` for every part, before any part runs (a part reads the flags of
+    particles in later parts: their reactions are stored). Returns the ``own`` flags (none
+    with one part: every reaction is added at once)."""
+    n = f.shape[0]
+    nt = bounds.shape[0] - 1
+    own = np.empty(n if nt > 1 else 0, np.bool_)
+    if nt == 1:
+        _open_part(0, n, pi, jstart, jk, f, torque, own)
+        return own
+    for t in prange(nt):
+        _open_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), pi, jstart, jk, f, torque,
+                   own)
+    return own
 
 
 @inline_njit
@@ -1265,12 +1294,12 @@ def _reaction_sum(i, jstart, fj):
 
 
 @njit
-def _close_part(lo, hi, jstart, fj, f, torque, shared):
+def _close_part(lo, hi, jstart, fj, f, torque, own):
     """Complete the shared particles of rows ``lo:hi``: ``f_i = row sum + reaction sum``
     (what :func:`reduce_pass` does), and zero the slots read, so that the slots of pairs
     out of reach hold zero at the next pass (:func:`_store_chunk`)."""
     for i in range(lo, hi):
-        if not shared[i]:
+        if own[i]:
             continue
         g0, g1, g2, h0, h1, h2 = _reaction_sum(i, jstart, fj)
         for q in range(jstart[i], jstart[i + 1]):
