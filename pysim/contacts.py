@@ -59,10 +59,14 @@ from pysim.jit import inline_njit, njit, pnjit, prange
 
 #: columns of a recorded contact: point (3), normal (3), overlap, force on i (3)
 REC_COLUMNS = 10
-#: components of the per-pair reaction ``fj``: force on j (3), torque on j (3). ``fj`` is
-#: stored one row per component, ``fj[c, k]`` for pair ``k``, so that a pass that uses
-#: only some components (the rods' separations, or the reactions of a few shared
-#: particles) touches only their memory pages: the pages never touched take no memory
+#: components of a stored reaction on a pair's second particle: force (3), torque (3).
+#: They are stored in the first :data:`FJ_COLUMNS` rows of the per-pair scratch ``fj``
+#: read as one flat array ``fr = fj.reshape(-1)``, one record of 6 values per index
+#: (``fr[6 q + c]``): a store writes one or two cache lines, not six rows far apart. The
+#: general pass (:func:`pair_pass`) indexes the records by the pair's place in the
+#: transposed list (:func:`_slot`), the sphere and rod passes by the pair itself
+#: (:func:`_store_chunk`). The other rows (the rods' separations) lie beyond the records;
+#: memory pages that are never touched take no memory
 FJ_COLUMNS = 6
 #: the row of ``fj`` (when it has one) that holds the pair's spine distance at the last
 #: list build (:func:`pysim.neighbors.spine_separations`), for skipping pairs out of reach
@@ -200,7 +204,8 @@ def block_totals(blk, virial):
 def _slot(k, j, jstart, jk):
     """Where pair ``k`` stores its reaction on its second particle ``j``: its place ``q``
     in the transposed list (``jk[q] = k``), so that the reactions on ``j`` lie together,
-    in pair order, in ``fj[:, jstart[j]:jstart[j+1]]`` (a search of ``j``'s few pairs)."""
+    in pair order, in the records ``jstart[j]:jstart[j+1]`` (:data:`FJ_COLUMNS`; a search
+    of ``j``'s few pairs)."""
     q = jstart[j]
     while jk[q] != k:
         q += 1
@@ -208,21 +213,23 @@ def _slot(k, j, jstart, jk):
 
 
 @inline_njit
-def _store(q, fj, F0, F1, F2, u0, u1, u2):
-    """Store a reaction (force ``-F``, torque ``u``) in slot ``q`` of ``fj``."""
-    fj[0, q] = -F0
-    fj[1, q] = -F1
-    fj[2, q] = -F2
-    fj[3, q] = u0
-    fj[4, q] = u1
-    fj[5, q] = u2
+def _store(q, fr, F0, F1, F2, u0, u1, u2):
+    """Store a reaction (force ``-F``, torque ``u``) in slot ``q`` of the records ``fr``
+    (:data:`FJ_COLUMNS`)."""
+    b = FJ_COLUMNS * q
+    fr[b] = -F0
+    fr[b + 1] = -F1
+    fr[b + 2] = -F2
+    fr[b + 3] = u0
+    fr[b + 4] = u1
+    fr[b + 5] = u2
 
 
 @inline_njit
-def _no_reaction(q, fj):
-    """A zero reaction in slot ``q`` of ``fj`` (a pair out of contact)."""
+def _no_reaction(q, fr):
+    """A zero reaction in slot ``q`` of the records ``fr`` (a pair out of contact)."""
     for c in range(FJ_COLUMNS):
-        fj[c, q] = 0.0
+        fr[FJ_COLUMNS * q + c] = 0.0
 
 
 @inline_njit
@@ -244,16 +251,16 @@ def _reaction(j, solo, own, f, torque, F0, F1, F2, u0, u1, u2):
 
 
 @njit
-def _store_chunk(pj, jstart, jk, fj, X, cap, fo, uo, torques, kin, kl, nl):
-    """Store in their slots (:func:`_slot`) the reactions that :func:`_reaction` left
-    out, for :func:`_close_part`: the pairs in reach of a chunk are ``kin``, those left
-    out are the columns ``kl[:nl]``; their force on i is in rows ``fo:fo+3`` of the
-    chunk's scratch ``X`` (``cap`` values per row) and, with ``torques``, their torque on
-    j in rows ``uo:uo+3``. The slots of pairs out of reach stay zero (:func:`_close_part`
-    leaves every slot it reads at zero)."""
+def _store_chunk(fr, X, cap, fo, uo, torques, kin, kl, nl):
+    """Store the reactions that :func:`_reaction` left out, for :func:`_close_part`, each
+    in the record of its pair ``k`` (``fr[6 k:6 k + 6]``; the closing pass reads a
+    particle's records in pair order through the transposed list): the pairs in reach
+    of a chunk are ``kin``, those left out are the columns ``kl[:nl]``; their force on i
+    is in rows ``fo:fo+3`` of the chunk's scratch ``X`` (``cap`` values per row) and,
+    with ``torques``, their torque on j in rows ``uo:uo+3``. The records of pairs out of
+    reach stay zero (:func:`_close_part` leaves every record it reads at zero)."""
     for q in range(nl):
         m = kl[q]
-        k = kin[m]
         u0 = 0.0
         u1 = 0.0
         u2 = 0.0
@@ -261,8 +268,8 @@ def _store_chunk(pj, jstart, jk, fj, X, cap, fo, uo, torques, kin, kl, nl):
             u0 = X[uo * cap + m]
             u1 = X[(uo + 1) * cap + m]
             u2 = X[(uo + 2) * cap + m]
-        _store(_slot(k, pj[k], jstart, jk), fj, X[fo * cap + m], X[(fo + 1) * cap + m],
-               X[(fo + 2) * cap + m], u0, u1, u2)
+        _store(kin[m], fr, X[fo * cap + m], X[(fo + 1) * cap + m], X[(fo + 2) * cap + m], u0,
+               u1, u2)
 
 
 @njit
@@ -321,6 +328,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
     if scatter:
         _zero(f, torque)
     no_parts = np.empty(0, np.bool_)  # no shared particles (reactions: all or none stored)
+    fr = fj.reshape(-1)  # the reaction records (FJ_COLUMNS)
     # with scatter one loop iteration holds every row, so the rows run in order on one
     # thread whatever the number of threads (a race otherwise)
     nt = 1 if scatter else nb
@@ -351,7 +359,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
                         hist[k, 1] = 0.0
                         hist[k, 2] = 0.0
                     if not scatter:
-                        _no_reaction(_slot(k, j, jstart, jk), fj)
+                        _no_reaction(_slot(k, j, jstart, jk), fr)
                     continue
                 d0, d1, d2 = min_image(x[j, 0] - xi0, x[j, 1] - xi1, x[j, 2] - xi2, b0, b1, b2,
                                        p0, p1, p2)
@@ -414,7 +422,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
                         hist[k, 1] = 0.0
                         hist[k, 2] = 0.0
                     if not scatter:
-                        _no_reaction(_slot(k, j, jstart, jk), fj)
+                        _no_reaction(_slot(k, j, jstart, jk), fr)
                     continue
                 s0 += F0
                 s1 += F1
@@ -425,7 +433,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
                 if scatter:
                     _reaction(j, True, no_parts, f, torque, F0, F1, F2, r0, r1, r2)
                 else:
-                    _store(_slot(k, j, jstart, jk), fj, F0, F1, F2, r0, r1, r2)
+                    _store(_slot(k, j, jstart, jk), fr, F0, F1, F2, r0, r1, r2)
                 if stats:
                     blk[b, 0] += pe
                     blk[b, 1] += 1.0
@@ -723,6 +731,7 @@ def _sphere_part(bl, bh, nt, x, v, omega, radius, b0, b1, b2, p0, p1, p2, pi, pj
     (True at run time) and 1.06 ms with the constant (10^4 spheres with friction, one
     thread)."""
     n = x.shape[0]
+    fr = fj.reshape(-1)  # the reaction records (FJ_COLUMNS)
     S = np.zeros(_NS * CAP)  # zeros: the padding columns never hold garbage
     kk = np.empty(CAP, np.int64)
     ko = np.empty(CAP, np.int64)
@@ -757,7 +766,7 @@ def _sphere_part(bl, bh, nt, x, v, omega, radius, b0, b1, b2, p0, p1, p2, pi, pj
                     i, s0, s1, s2, q0, q1, q2, nl = _sphere_scatter(
                         k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, False,
                         blk, b, S, kk, mc, False, own, kl, s0, s1, s2, q0, q1, q2)
-                _store_chunk(pj, jstart, jk, fj, S, CAP, _F, _U, friction, kk, kl, nl)
+                _store_chunk(fr, S, CAP, _F, _U, friction, kk, kl, nl)
             k0 = k1
             if k0 >= k_end:
                 break
@@ -779,16 +788,17 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, 
     thread). A part adds each reaction to its second particle at once, as
     :func:`pair_pass` does on one thread, unless that particle lies past the part or
     also receives reactions from an earlier part (``shared``): those reactions are
-    stored per pair (after each chunk, :func:`_store_chunk`, in the pair's slot,
-    :func:`_slot`) and summed from zero in pair order after the parts
-    (:func:`_close_part`). Which particles those are is found before the parts run
-    (:func:`_open_parts`), so that the scatter tests one flag per pair (testing
-    ``j`` against the part's end and a flag took 1.5 ms per pass on two parts, one
-    thread, against 1.1 with one part). Either way ``f_i = row sum + reaction sum`` in pair order, so
-    any number of parts gives the same bits; with spatially sorted particles few are
-    shared, and the threads touch no more memory than one thread does. With more than
-    one part the slots of the shared particles in ``fj`` must hold zero on entry
-    (:func:`clear_slots`); they are left at zero.
+    stored per pair (after each chunk, :func:`_store_chunk`, in the pair's record) and
+    summed from zero in pair order after the parts (:func:`_close_part`). Which
+    particles those are is found before the parts run (:func:`_open_parts`), so that the
+    scatter tests one flag per pair. Either way ``f_i = row sum + reaction sum`` in pair
+    order, so any number of parts gives the same bits; with spatially sorted particles
+    few are shared, and the threads touch no more memory than one thread does. With more
+    than one part the records of the shared particles' pairs in ``fj`` must hold zero on
+    entry (:func:`clear_slots`); they are left at zero. Two parts on one thread, 10^4
+    spheres with friction: 1.51 ms per pass with the part's end and a flag tested per
+    pair, the records searched in the transposed list and six rows apart; 1.17 ms now
+    (one part: 1.05 ms).
 
     Each block of rows runs in chunks of at most ``CAP`` listed pairs, in three loops:
     :func:`_sphere_gather` copies the pairs in reach into a scratch, one column each,
@@ -811,8 +821,8 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, 
                      friction, dt, f, torque, fj, stats, blk, own)
     if nt > 1:
         for t in prange(nt):
-            _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, fj, f, torque,
-                        own)
+            _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, jk,
+                        fj.reshape(-1), f, torque, own)
     if stats:
         return block_totals(blk, virial)
     return 0.0, 0
@@ -1102,6 +1112,7 @@ def _rod_part(bl, bh, nt, x, v, omega, u, radius, half, b0, b1, b2, p0, p1, p2, 
     scatter compiles apart as in :func:`_sphere_part` (a step of 2000 rods, one thread:
     0.416 ms before, 0.397 after)."""
     n = x.shape[0]
+    fr = fj.reshape(-1)  # the reaction records (FJ_COLUMNS)
     A = np.zeros(_NA * RCAP)
     R = np.zeros(_NR * RCAP)  # zeros: the padding columns never hold garbage
     ka = np.empty(RCAP, np.int64)
@@ -1141,7 +1152,7 @@ def _rod_part(bl, bh, nt, x, v, omega, u, radius, half, b0, b1, b2, p0, p1, p2, 
                     i, s0, s1, s2, q0, q1, q2, nl = _rod_scatter(
                         k1, i, hi, pj, istart, hist, friction, f, torque, False, blk, b, R, kr,
                         mr, kb, mo, False, own, kl, s0, s1, s2, q0, q1, q2)
-                _store_chunk(pj, jstart, jk, fj, R, RCAP, _RF, _RU, True, kr, kl, nl)
+                _store_chunk(fr, R, RCAP, _RF, _RU, True, kr, kl, nl)
             k0 = k1
             if k0 >= k_end:
                 break
@@ -1177,8 +1188,8 @@ def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart
                   sep_shrink)
     if nt > 1:
         for t in prange(nt):
-            _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, fj, f, torque,
-                        own)
+            _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, jk,
+                        fj.reshape(-1), f, torque, own)
     if stats:
         return block_totals(blk, virial)
     return 0.0, 0
@@ -1254,29 +1265,30 @@ def _is_shared(i, lo, pi, jstart, jk):
 
 @njit
 def clear_slots(pi, istart, jstart, jk, fj, parts):
-    """Zero the reaction slots (``fj[:FJ_COLUMNS]``) of the pairs of every particle that
-    :func:`sphere_pass` and :func:`rod_pass` on ``parts`` parts store reactions for (the
-    shared ones, :func:`_open_part`). The passes need these slots at zero on entry and
-    leave them so (:func:`_close_part`); after a list build they hold other pairs' values
-    or garbage, and a new number of parts shares other particles. Only those slots are
-    touched, so the memory of the others is never made resident."""
+    """Zero the reaction records (:data:`FJ_COLUMNS`, one per pair) of the pairs of every
+    particle that :func:`sphere_pass` and :func:`rod_pass` on ``parts`` parts store
+    reactions for (the shared ones, :func:`_open_part`). The passes need these records at
+    zero on entry and leave them so (:func:`_close_part`); after a list build they hold
+    other pairs' values or garbage, and a new number of parts shares other particles.
+    Only those records are touched, so the memory of the others is never made
+    resident."""
     n = istart.shape[0] - 1
     if parts < 2:
         return
     bounds = part_bounds(istart, (n + BLOCK - 1) // BLOCK, parts)
+    fr = fj.reshape(-1)
     for t in range(1, parts):
         lo = bounds[t] * BLOCK
         for i in range(lo, min(n, bounds[t + 1] * BLOCK)):
             if _is_shared(i, lo, pi, jstart, jk):
                 for q in range(jstart[i], jstart[i + 1]):
-                    for c in range(FJ_COLUMNS):
-                        fj[c, q] = 0.0
+                    _no_reaction(jk[q], fr)
 
 
 @njit
-def _reaction_sum(i, jstart, fj):
+def _reaction_sum(i, jstart, fr):
     """The stored reactions on particle ``i`` (force, torque), summed from zero in pair
-    order (their slots, :func:`_slot`)."""
+    order (their slots, :func:`_slot`, in the records ``fr``)."""
     g0 = 0.0
     g1 = 0.0
     g2 = 0.0
@@ -1284,27 +1296,41 @@ def _reaction_sum(i, jstart, fj):
     h1 = 0.0
     h2 = 0.0
     for q in range(jstart[i], jstart[i + 1]):
-        g0 += fj[0, q]
-        g1 += fj[1, q]
-        g2 += fj[2, q]
-        h0 += fj[3, q]
-        h1 += fj[4, q]
-        h2 += fj[5, q]
+        b = FJ_COLUMNS * q
+        g0 += fr[b]
+        g1 += fr[b + 1]
+        g2 += fr[b + 2]
+        h0 += fr[b + 3]
+        h1 += fr[b + 4]
+        h2 += fr[b + 5]
     return g0, g1, g2, h0, h1, h2
 
 
 @njit
-def _close_part(lo, hi, jstart, fj, f, torque, own):
+def _close_part(lo, hi, jstart, jk, fr, f, torque, own):
     """Complete the shared particles of rows ``lo:hi``: ``f_i = row sum + reaction sum``
-    (what :func:`reduce_pass` does), and zero the slots read, so that the slots of pairs
-    out of reach hold zero at the next pass (:func:`_store_chunk`)."""
+    (as :func:`reduce_pass` does; the reactions are in the records of their pairs,
+    :func:`_store_chunk`, read in pair order through the transposed list), and zero the
+    records read, so that those of pairs out of reach hold zero at the next pass."""
     for i in range(lo, hi):
         if own[i]:
             continue
-        g0, g1, g2, h0, h1, h2 = _reaction_sum(i, jstart, fj)
+        g0 = 0.0
+        g1 = 0.0
+        g2 = 0.0
+        h0 = 0.0
+        h1 = 0.0
+        h2 = 0.0
         for q in range(jstart[i], jstart[i + 1]):
+            b = FJ_COLUMNS * jk[q]
+            g0 += fr[b]
+            g1 += fr[b + 1]
+            g2 += fr[b + 2]
+            h0 += fr[b + 3]
+            h1 += fr[b + 4]
+            h2 += fr[b + 5]
             for c in range(FJ_COLUMNS):
-                fj[c, q] = 0.0
+                fr[b + c] = 0.0
         f[i, 0] = f[i, 0] + g0
         f[i, 1] = f[i, 1] + g1
         f[i, 2] = f[i, 2] + g2
@@ -1321,6 +1347,7 @@ def reduce_pass(f, torque, jstart, fj, v, omega, mass, gx, gy, gz, gamma_bg, gam
     order, then added: ``f_i = row sum + reaction sum``), then, with ``body``, gravity
     ``m g`` and the drags ``-gamma_bg v``, ``-gamma_rot omega``. ``gathered``: the contact
     pass scattered the reactions already (one thread), only the body forces are added."""
+    fr = fj.reshape(-1)  # the reaction records (FJ_COLUMNS)
     for i in prange(f.shape[0]):
         s0 = f[i, 0]
         s1 = f[i, 1]
@@ -1329,7 +1356,7 @@ def reduce_pass(f, torque, jstart, fj, v, omega, mass, gx, gy, gz, gamma_bg, gam
         q1 = torque[i, 1]
         q2 = torque[i, 2]
         if not gathered:
-            g0, g1, g2, h0, h1, h2 = _reaction_sum(i, jstart, fj)
+            g0, g1, g2, h0, h1, h2 = _reaction_sum(i, jstart, fr)
             s0 = s0 + g0
             s1 = s1 + g1
             s2 = s2 + g2
