@@ -814,7 +814,7 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, 
     blk = np.zeros((nb if stats else 0, _STATS))
     nt = max(1, parts)
     bounds = part_bounds(istart, nb, nt)
-    own = _open_parts(bounds, pi, jstart, jk, f, torque)
+    own = _open_parts(bounds, istart, jstart, jk, f, torque)
     for t in prange(nt):
         _sphere_part(bounds[t], bounds[t + 1], nt, x, v, omega, radius, b0, b1, b2, p0, p1, p2,
                      pi, pj, istart, jstart, jk, hist, law, kn, gn, kt, gt, mu, fcoh, dcoh,
@@ -1180,7 +1180,7 @@ def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart
     blk = np.zeros((nb if stats else 0, _STATS))
     nt = max(1, parts)
     bounds = part_bounds(istart, nb, nt)
-    own = _open_parts(bounds, pi, jstart, jk, f, torque)
+    own = _open_parts(bounds, istart, jstart, jk, f, torque)
     for t in prange(nt):
         _rod_part(bounds[t], bounds[t + 1], nt, x, v, omega, u, radius, half, b0, b1, b2, p0, p1,
                   p2, pi, pj, istart, jstart, jk, hist, law, kn, gn, kt, gt, mu, fcoh, dcoh,
@@ -1223,7 +1223,7 @@ def part_bounds(istart, nb, nparts):
 
 
 @njit
-def _open_part(lo, hi, pi, jstart, jk, f, torque, own):
+def _open_part(lo, hi, istart, jstart, jk, f, torque, own):
     """Start the part of rows ``lo:hi``: zero their forces and torques, and mark as
     ``own`` the particles that are not the second member of a pair whose row lies before
     ``lo`` (in another part): their reactions all come from this part and are added at
@@ -1235,12 +1235,18 @@ def _open_part(lo, hi, pi, jstart, jk, f, torque, own):
             torque[i, c] = 0.0
     if own.shape[0] == 0:  # one part: nothing shared
         return
-    for i in range(lo, hi):
-        own[i] = lo == 0 or not _is_shared(i, lo, pi, jstart, jk)
+    kb = istart[lo]  # the first pair of the part: rows before lo hold the pairs before it
+    last = jk.shape[0] - 1
+    if last < 0:  # no pairs
+        own[lo:hi] = True
+        return
+    for i in range(lo, hi):  # _is_shared without branches (2x faster)
+        q = jstart[i]
+        own[i] = (q == jstart[i + 1]) | (jk[min(q, last)] >= kb)
 
 
 @pnjit
-def _open_parts(bounds, pi, jstart, jk, f, torque):
+def _open_parts(bounds, istart, jstart, jk, f, torque):
     """:func:`_open_part` for every part, before any part runs (a part reads the flags of
     particles in later parts: their reactions are stored). Returns the ``own`` flags (none
     with one part: every reaction is added at once)."""
@@ -1248,23 +1254,26 @@ def _open_parts(bounds, pi, jstart, jk, f, torque):
     nt = bounds.shape[0] - 1
     own = np.empty(n if nt > 1 else 0, np.bool_)
     if nt == 1:
-        _open_part(0, n, pi, jstart, jk, f, torque, own)
+        _open_part(0, n, istart, jstart, jk, f, torque, own)
         return own
     for t in prange(nt):
-        _open_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), pi, jstart, jk, f, torque,
-                   own)
+        _open_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), istart, jstart, jk, f,
+                   torque, own)
     return own
 
 
 @inline_njit
-def _is_shared(i, lo, pi, jstart, jk):
-    """Particle ``i`` is the second member of a pair whose row lies before ``lo``."""
+def _is_shared(i, kb, jstart, jk):
+    """Particle ``i`` is the second member of a pair before pair ``kb`` (the transposed
+    list holds each particle's pairs in pair order: its first one decides). Pairs are
+    ordered by row, so with ``kb`` the first pair of row ``lo``: of a pair whose row lies
+    before ``lo`` (reading the row, ``pi``, took 5x the time)."""
     q = jstart[i]
-    return q < jstart[i + 1] and pi[jk[q]] < lo
+    return q < jstart[i + 1] and jk[q] < kb
 
 
 @njit
-def clear_slots(pi, istart, jstart, jk, fj, parts):
+def clear_slots(istart, jstart, jk, fj, parts):
     """Zero the reaction records (:data:`FJ_COLUMNS`, one per pair) of the pairs of every
     particle that :func:`sphere_pass` and :func:`rod_pass` on ``parts`` parts store
     reactions for (the shared ones, :func:`_open_part`). The passes need these records at
@@ -1280,7 +1289,7 @@ def clear_slots(pi, istart, jstart, jk, fj, parts):
     for t in range(1, parts):
         lo = bounds[t] * BLOCK
         for i in range(lo, min(n, bounds[t + 1] * BLOCK)):
-            if _is_shared(i, lo, pi, jstart, jk):
+            if _is_shared(i, istart[lo], jstart, jk):
                 for q in range(jstart[i], jstart[i + 1]):
                     _no_reaction(jk[q], fr)
 
