@@ -63,10 +63,14 @@ REC_COLUMNS = 10
 #: They are stored in the first :data:`FJ_COLUMNS` rows of the per-pair scratch ``fj``
 #: read as one flat array ``fr = fj.reshape(-1)``, one record of 6 values per index
 #: (``fr[6 q + c]``): a store writes one or two cache lines, not six rows far apart. The
-#: general pass (:func:`pair_pass`) indexes the records by the pair's place in the
-#: transposed list (:func:`_slot`), the sphere and rod passes by the pair itself
-#: (:func:`_store_chunk`). The other rows (the rods' separations) lie beyond the records;
-#: memory pages that are never touched take no memory
+#: general pass (:func:`pair_pass`) and :func:`rod_pass` index the records by the pair's
+#: slot, its place in the transposed list (:func:`_slot`), :func:`sphere_pass` by the
+#: pair itself: its stores then run in pair order, without a search (two parts, one
+#: thread, 10^4 spheres: 1.15 ms per pass against 1.25), but the records written spread
+#: over all pairs of the rows next to a part's ends, and for rods, with many pairs per
+#: row, that made 10^4 rods on two threads peak at 1048 bytes each instead of 942. The
+#: other rows (the rods' separations) lie beyond the records; memory pages that are never
+#: touched take no memory
 FJ_COLUMNS = 6
 #: the row of ``fj`` (when it has one) that holds the pair's spine distance at the last
 #: list build (:func:`pysim.neighbors.spine_separations`), for skipping pairs out of reach
@@ -251,16 +255,17 @@ def _reaction(j, solo, own, f, torque, F0, F1, F2, u0, u1, u2):
 
 
 @njit
-def _store_chunk(fr, X, cap, fo, uo, torques, kin, kl, nl):
-    """Store the reactions that :func:`_reaction` left out, for :func:`_close_part`, each
-    in the record of its pair ``k`` (``fr[6 k:6 k + 6]``; the closing pass reads a
-    particle's records in pair order through the transposed list): the pairs in reach
-    of a chunk are ``kin``, those left out are the columns ``kl[:nl]``; their force on i
-    is in rows ``fo:fo+3`` of the chunk's scratch ``X`` (``cap`` values per row) and,
-    with ``torques``, their torque on j in rows ``uo:uo+3``. The records of pairs out of
-    reach stay zero (:func:`_close_part` leaves every record it reads at zero)."""
+def _store_chunk(pj, jstart, jk, fr, X, cap, fo, uo, torques, kin, kl, nl, by_pair):
+    """Store the reactions that :func:`_reaction` left out, for :func:`_close_part`: the
+    pairs in reach of a chunk are ``kin``, those left out are the columns ``kl[:nl]``;
+    their force on i is in rows ``fo:fo+3`` of the chunk's scratch ``X`` (``cap`` values
+    per row) and, with ``torques``, their torque on j in rows ``uo:uo+3``. Each goes to
+    the record of its pair ``k`` with ``by_pair``, else of its slot (:func:`_slot`).
+    The records of pairs out of reach stay zero (:func:`_close_part` leaves every record
+    it reads at zero)."""
     for q in range(nl):
         m = kl[q]
+        k = kin[m]
         u0 = 0.0
         u1 = 0.0
         u2 = 0.0
@@ -268,8 +273,8 @@ def _store_chunk(fr, X, cap, fo, uo, torques, kin, kl, nl):
             u0 = X[uo * cap + m]
             u1 = X[(uo + 1) * cap + m]
             u2 = X[(uo + 2) * cap + m]
-        _store(kin[m], fr, X[fo * cap + m], X[(fo + 1) * cap + m], X[(fo + 2) * cap + m], u0,
-               u1, u2)
+        _store(k if by_pair else _slot(k, pj[k], jstart, jk), fr, X[fo * cap + m],
+               X[(fo + 1) * cap + m], X[(fo + 2) * cap + m], u0, u1, u2)
 
 
 @njit
@@ -766,7 +771,7 @@ def _sphere_part(bl, bh, nt, x, v, omega, radius, b0, b1, b2, p0, p1, p2, pi, pj
                     i, s0, s1, s2, q0, q1, q2, nl = _sphere_scatter(
                         k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, False,
                         blk, b, S, kk, mc, False, own, kl, s0, s1, s2, q0, q1, q2)
-                _store_chunk(fr, S, CAP, _F, _U, friction, kk, kl, nl)
+                _store_chunk(pj, jstart, jk, fr, S, CAP, _F, _U, friction, kk, kl, nl, True)
             k0 = k1
             if k0 >= k_end:
                 break
@@ -797,8 +802,8 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, 
     than one part the records of the shared particles' pairs in ``fj`` must hold zero on
     entry (:func:`clear_slots`); they are left at zero. Two parts on one thread, 10^4
     spheres with friction: 1.51 ms per pass with the part's end and a flag tested per
-    pair, the records searched in the transposed list and six rows apart; 1.17 ms now
-    (one part: 1.05 ms).
+    pair, the reactions stored six rows apart at a slot searched in the transposed list;
+    1.15 ms now (one part: 1.05 ms).
 
     Each block of rows runs in chunks of at most ``CAP`` listed pairs, in three loops:
     :func:`_sphere_gather` copies the pairs in reach into a scratch, one column each,
@@ -822,7 +827,7 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, 
     if nt > 1:
         for t in prange(nt):
             _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, jk,
-                        fj.reshape(-1), f, torque, own)
+                        fj.reshape(-1), f, torque, own, True)
     if stats:
         return block_totals(blk, virial)
     return 0.0, 0
@@ -1152,7 +1157,7 @@ def _rod_part(bl, bh, nt, x, v, omega, u, radius, half, b0, b1, b2, p0, p1, p2, 
                     i, s0, s1, s2, q0, q1, q2, nl = _rod_scatter(
                         k1, i, hi, pj, istart, hist, friction, f, torque, False, blk, b, R, kr,
                         mr, kb, mo, False, own, kl, s0, s1, s2, q0, q1, q2)
-                _store_chunk(fr, R, RCAP, _RF, _RU, True, kr, kl, nl)
+                _store_chunk(pj, jstart, jk, fr, R, RCAP, _RF, _RU, True, kr, kl, nl, False)
             k0 = k1
             if k0 >= k_end:
                 break
@@ -1189,7 +1194,7 @@ def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart
     if nt > 1:
         for t in prange(nt):
             _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, jk,
-                        fj.reshape(-1), f, torque, own)
+                        fj.reshape(-1), f, torque, own, False)
     if stats:
         return block_totals(blk, virial)
     return 0.0, 0
@@ -1273,14 +1278,15 @@ def _is_shared(i, kb, jstart, jk):
 
 
 @njit
-def clear_slots(istart, jstart, jk, fj, parts):
+def clear_slots(istart, jstart, jk, fj, parts, by_pair):
     """Zero the reaction records (:data:`FJ_COLUMNS`, one per pair) of the pairs of every
     particle that :func:`sphere_pass` and :func:`rod_pass` on ``parts`` parts store
     reactions for (the shared ones, :func:`_open_part`). The passes need these records at
     zero on entry and leave them so (:func:`_close_part`); after a list build they hold
     other pairs' values or garbage, and a new number of parts shares other particles.
     Only those records are touched, so the memory of the others is never made
-    resident."""
+    resident. ``by_pair``: the records of pairs (:func:`sphere_pass`), else of slots
+    (:func:`rod_pass`; :func:`_store_chunk`)."""
     n = istart.shape[0] - 1
     if parts < 2:
         return
@@ -1291,7 +1297,7 @@ def clear_slots(istart, jstart, jk, fj, parts):
         for i in range(lo, min(n, bounds[t + 1] * BLOCK)):
             if _is_shared(i, istart[lo], jstart, jk):
                 for q in range(jstart[i], jstart[i + 1]):
-                    _no_reaction(jk[q], fr)
+                    _no_reaction(jk[q] if by_pair else q, fr)
 
 
 @njit
@@ -1316,11 +1322,12 @@ def _reaction_sum(i, jstart, fr):
 
 
 @njit
-def _close_part(lo, hi, jstart, jk, fr, f, torque, own):
+def _close_part(lo, hi, jstart, jk, fr, f, torque, own, by_pair):
     """Complete the shared particles of rows ``lo:hi``: ``f_i = row sum + reaction sum``
-    (as :func:`reduce_pass` does; the reactions are in the records of their pairs,
-    :func:`_store_chunk`, read in pair order through the transposed list), and zero the
-    records read, so that those of pairs out of reach hold zero at the next pass."""
+    (as :func:`reduce_pass` does; the reactions in the records of their pairs with
+    ``by_pair``, else of their slots, read in pair order through the transposed list),
+    and zero the records read, so that those of pairs out of reach hold zero at the next
+    pass (:func:`_store_chunk`)."""
     for i in range(lo, hi):
         if own[i]:
             continue
@@ -1331,7 +1338,7 @@ def _close_part(lo, hi, jstart, jk, fr, f, torque, own):
         h1 = 0.0
         h2 = 0.0
         for q in range(jstart[i], jstart[i + 1]):
-            b = FJ_COLUMNS * jk[q]
+            b = FJ_COLUMNS * (jk[q] if by_pair else q)
             g0 += fr[b]
             g1 += fr[b + 1]
             g2 += fr[b + 2]

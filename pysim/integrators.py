@@ -174,7 +174,7 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, js
     scatter = True
     ends = sys[RODS] != 0.0 and cp[END_BONDS] != 0.0
     if not ends and parts > 1 and sys[SLOT_PARTS] != parts:
-        clear_slots(istart, jstart, jk, fj, parts)
+        clear_slots(istart, jstart, jk, fj, parts, sys[RODS] == 0.0)
         sys[SLOT_PARTS] = parts
     if ends:
         scatter = parts == 1

@@ -315,7 +315,7 @@ def test_sphere_pass_equals_the_general_pass(rng, friction, law, parts):
                                law_id, p, friction, 1e-4, False, f, tq, fj, True, vir, 0.0, 0.0,
                                True)
         else:
-            clear_slots(istart, jstart, jk, fj, parts)
+            clear_slots(istart, jstart, jk, fj, parts, True)
             pe, nc = sphere_pass(x, v, w, r, box, per, pi, pj, istart, jstart, jk, hist,
                                  law_id, p, friction, 1e-4, f, tq, fj, True, vir, parts)
             assert np.all(np.isnan(fj) | (fj == 0.0))  # slots read are left at zero
@@ -380,7 +380,7 @@ def test_sphere_pass_is_the_same_bits_in_any_number_of_parts(rng, order):
         f = np.full((n, 3), np.nan)
         tq = np.full((n, 3), np.nan)
         fj = np.full((6, len(pj)), np.nan)  # only the shared particles' slots are read
-        clear_slots(istart, jstart, jk, fj, parts)
+        clear_slots(istart, jstart, jk, fj, parts, True)
         zeroed = np.sum(fj == 0.0)  # records of the shared particles' pairs
         assert zeroed == 0 if parts == 1 else zeroed > 3 * 6
         vir = np.zeros((3, 3))
@@ -482,7 +482,7 @@ def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, parts
             reduce_pass(f, tq, jstart, fj, v, w, np.ones(n), 0.0, 0.0, 0.0, 0.0, 0.0,
                         False)
         else:
-            clear_slots(istart, jstart, jk, fj, parts)
+            clear_slots(istart, jstart, jk, fj, parts, False)
             pe, nc = rod_pass(x, v, w, u, r, half, box, PER, pi, pj, istart, jstart, jk, h,
                               law_id, p, friction, 1e-4, f, tq, fj, True, vir, sigma, shrink,
                               parts)
