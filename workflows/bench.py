@@ -12,7 +12,8 @@ same contact model and time step; :data:`MODEL`):
   as rigid glued-sphere rods (9 spheres, spacing ``D/2``, :mod:`workflows.glued`).
 * ``scaling``: pysim alone, spheres and rods tiled from the dense states to ``N`` up to
   10^6 and sorted by cell (as a large initial configuration is): seconds per step and
-  peak memory.
+  peak memory, on 1 and on 2 threads; printed as the time per particle-step relative to
+  ``N = 10^4`` (:func:`scaling_spread`).
 
 Every timing is the engine's own loop time (LAMMPS/LIGGGHTS ``Loop time``; pysim the
 wall time of ``Simulation.run``), in a fresh process, engines alternating within each
@@ -335,10 +336,11 @@ def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, rep
                     np.savez(path, box=box, **dict(zip(names, arrays)))
                 n = len(arrays[0])
                 nsteps = max(scaling_steps, int(round(scaling_work / n)))
-                r = run_pysim(path, max(cores), nsteps, True)
-                add(f"scaling_{kind}", "pysim", max(cores), n, nsteps, r["seconds"],
-                    bytes_per_particle=round((r["peak_rss"] - r["base_rss"]) / n),
-                    peak_mib=round(r["peak_rss"] / 2**20), list_rebuilds=r["rebuilds"])
+                for c in cores:
+                    r = run_pysim(path, c, nsteps, True)
+                    add(f"scaling_{kind}", "pysim", c, n, nsteps, r["seconds"],
+                        bytes_per_particle=round((r["peak_rss"] - r["base_rss"]) / n),
+                        peak_mib=round(r["peak_rss"] / 2**20), list_rebuilds=r["rebuilds"])
     out.parent.mkdir(parents=True, exist_ok=True)
     with open(out, "w", newline="") as fh:
         w = csv.DictWriter(fh, FIELDS, extrasaction="ignore")
@@ -363,6 +365,21 @@ def ratios(rows) -> list[tuple]:
     return out
 
 
+def scaling_spread(rows, base: int = 10_000) -> list[tuple]:
+    """``(case, cores, n, ratio)``: the time per particle-step at each scaling point
+    ``n`` over that of the point nearest ``base`` particles, for each case and core
+    count (the target: within 1.3 from 10^4 to 10^6)."""
+    out = []
+    for case, c in sorted({(r["case"], r["cores"]) for r in rows
+                           if r["case"].startswith("scaling")}):
+        sel = sorted([r for r in rows if r["case"] == case and r["cores"] == c],
+                     key=lambda r: r["n"])
+        per = {r["n"]: r["seconds"] / (r["steps"] * r["n"]) for r in sel}
+        ref = min(per, key=lambda n: abs(np.log(n / base)))
+        out += [(case, c, n, per[n] / per[ref]) for n in per if n >= ref]
+    return out
+
+
 def plot(rows, path: Path):
     import matplotlib
 
@@ -382,10 +399,12 @@ def plot(rows, path: Path):
     a.set_ylabel("million particle-steps (rods: rod-steps) / s")
     a.legend(fontsize=7)
     for kind in ("spheres", "rods"):
-        sc = sorted([r for r in rows if r["case"] == f"scaling_{kind}"], key=lambda r: r["n"])
-        if sc:
-            b.loglog([r["n"] for r in sc], [r["seconds"] / r["steps"] / r["n"] * 1e9 for r in sc],
-                     "o-", label=kind)
+        for c in sorted({r["cores"] for r in rows if r["case"] == f"scaling_{kind}"}):
+            sc = sorted([r for r in rows if r["case"] == f"scaling_{kind}" and r["cores"] == c],
+                        key=lambda r: r["n"])
+            b.loglog([r["n"] for r in sc],
+                     [r["seconds"] / r["steps"] / r["n"] * 1e9 for r in sc],
+                     "o-" if c == 1 else "s--", label=f"{kind}, {c} core(s)")
     b.set_xlabel("N")
     b.set_ylabel("ns per particle-step (pysim)")
     b.legend()
@@ -421,6 +440,11 @@ def main(argv=None) -> int:
     print("\npysim / peer throughput (median, min-max over repeats):")
     for case, c, peer, med, lo, hi in ratios(rows):
         print(f"  {case:22s} {c} core(s)  vs {peer:16s} {med:6.2f}x  ({lo:.2f}-{hi:.2f})")
+    spread = scaling_spread(rows)
+    if spread:
+        print("\npysim time per particle-step relative to the point nearest 10^4 particles:")
+        for case, c, n, q in spread:
+            print(f"  {case:22s} {c} core(s)  n={n:<8d} {q:5.2f}")
     print(f"wrote {a.out} and {a.out.with_suffix('.png')}")
     return 0
 
