@@ -762,7 +762,7 @@ def _sphere_part(bl, bh, nt, x, v, omega, radius, b0, b1, b2, p0, p1, p2, pi, pj
                 i, s0, s1, s2, q0, q1, q2, nl = _sphere_scatter(
                     k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, stats, blk,
                     b, S, kk, mc, True, own, kl, s0, s1, s2, q0, q1, q2)
-            else:  # stats a constant too (two parts, one thread: 0.93x the time)
+            else:  # stats a constant too (two threads: 0.93x the pass time)
                 if stats:
                     i, s0, s1, s2, q0, q1, q2, nl = _sphere_scatter(
                         k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, True,
@@ -1042,7 +1042,8 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, stats, blk, b
     """As :func:`_sphere_scatter` for the pairs in reach of ``R``: row sums, reactions
     (added to j, or left to :func:`_store_chunk`), springs, and the block's energy,
     contacts and virial; zero the spring of the pairs ``kb`` out of reach. Returns the
-    row and partial sums after the chunk. Kept apart from :func:`_sphere_scatter`, not
+    row and partial sums after the chunk, and the number of reactions left out (their
+    columns in ``kl``). Kept apart from :func:`_sphere_scatter`, not
     one function with the scratch layout as arguments: with runtime row offsets the
     sphere steps took 2-3 % longer (measured)."""
     nl = 0
