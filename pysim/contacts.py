@@ -1300,10 +1300,14 @@ def clear_slots(istart, jstart, jk, fj, parts, by_pair):
                     _no_reaction(jk[q] if by_pair else q, fr)
 
 
-@njit
-def _reaction_sum(i, jstart, fr):
+@inline_njit
+def _reaction_sum(i, jstart, jk, fr, by_pair, zero):
     """The stored reactions on particle ``i`` (force, torque), summed from zero in pair
-    order (their slots, :func:`_slot`, in the records ``fr``)."""
+    order: its records in ``fr`` are those of its pairs with ``by_pair``, else of its
+    slots (:func:`_slot`), both read through the transposed list. With ``zero`` each
+    record is zeroed as it is read. Inlined, so that the flags are constants at each
+    caller: called, or with the zeroing in a loop of its own, the closing pass took 1.4x
+    and 1.6x the time."""
     g0 = 0.0
     g1 = 0.0
     g2 = 0.0
@@ -1311,42 +1315,28 @@ def _reaction_sum(i, jstart, fr):
     h1 = 0.0
     h2 = 0.0
     for q in range(jstart[i], jstart[i + 1]):
-        b = FJ_COLUMNS * q
+        b = FJ_COLUMNS * (jk[q] if by_pair else q)
         g0 += fr[b]
         g1 += fr[b + 1]
         g2 += fr[b + 2]
         h0 += fr[b + 3]
         h1 += fr[b + 4]
         h2 += fr[b + 5]
+        if zero:
+            for c in range(FJ_COLUMNS):
+                fr[b + c] = 0.0
     return g0, g1, g2, h0, h1, h2
 
 
 @njit
 def _close_part(lo, hi, jstart, jk, fr, f, torque, own, by_pair):
     """Complete the shared particles of rows ``lo:hi``: ``f_i = row sum + reaction sum``
-    (as :func:`reduce_pass` does; the reactions in the records of their pairs with
-    ``by_pair``, else of their slots, read in pair order through the transposed list),
-    and zero the records read, so that those of pairs out of reach hold zero at the next
-    pass (:func:`_store_chunk`)."""
+    (as :func:`reduce_pass` does; :func:`_reaction_sum`), and zero the records read, so
+    that those of pairs out of reach hold zero at the next pass (:func:`_store_chunk`)."""
     for i in range(lo, hi):
         if own[i]:
             continue
-        g0 = 0.0
-        g1 = 0.0
-        g2 = 0.0
-        h0 = 0.0
-        h1 = 0.0
-        h2 = 0.0
-        for q in range(jstart[i], jstart[i + 1]):
-            b = FJ_COLUMNS * (jk[q] if by_pair else q)
-            g0 += fr[b]
-            g1 += fr[b + 1]
-            g2 += fr[b + 2]
-            h0 += fr[b + 3]
-            h1 += fr[b + 4]
-            h2 += fr[b + 5]
-            for c in range(FJ_COLUMNS):
-                fr[b + c] = 0.0
+        g0, g1, g2, h0, h1, h2 = _reaction_sum(i, jstart, jk, fr, by_pair, True)
         f[i, 0] = f[i, 0] + g0
         f[i, 1] = f[i, 1] + g1
         f[i, 2] = f[i, 2] + g2
@@ -1363,7 +1353,8 @@ def reduce_pass(f, torque, jstart, fj, v, omega, mass, gx, gy, gz, gamma_bg, gam
     order, then added: ``f_i = row sum + reaction sum``), then, with ``body``, gravity
     ``m g`` and the drags ``-gamma_bg v``, ``-gamma_rot omega``. ``gathered``: the contact
     pass scattered the reactions already (one thread), only the body forces are added."""
-    fr = fj.reshape(-1)  # the reaction records (FJ_COLUMNS)
+    fr = fj.reshape(-1)  # the reaction records (FJ_COLUMNS), at slots
+    no_jk = np.empty(0, np.int32)  # read only for records at pairs
     for i in prange(f.shape[0]):
         s0 = f[i, 0]
         s1 = f[i, 1]
@@ -1372,7 +1363,7 @@ def reduce_pass(f, torque, jstart, fj, v, omega, mass, gx, gy, gz, gamma_bg, gam
         q1 = torque[i, 1]
         q2 = torque[i, 2]
         if not gathered:
-            g0, g1, g2, h0, h1, h2 = _reaction_sum(i, jstart, fr)
+            g0, g1, g2, h0, h1, h2 = _reaction_sum(i, jstart, no_jk, fr, False, False)
             s0 = s0 + g0
             s1 = s1 + g1
             s2 = s2 + g2
