@@ -475,14 +475,20 @@ def spine_separations(x, u, half, box, periodic, pi, pj, out):
 
 
 def spatial_order(x, box, cell: float = 1.0) -> np.ndarray:
-    """A permutation that sorts particles by cell (row-major cells of edge ~``cell``):
-    applied to an initial configuration it keeps neighbours close in memory, which the
-    contact loop's speed for large N depends on (LAMMPS sorts its atoms likewise)."""
+    """A permutation that sorts particles by cell (cells of edge ~``cell``, row-major with
+    the longest box axis slowest and the shortest fastest): applied to an initial
+    configuration it keeps neighbours close in memory, which the contact loop's speed for
+    large N depends on (LAMMPS sorts its atoms likewise). A pair's second particle lies at
+    most about a plane of cells (the two shorter axes) further on, so taking the longest
+    axis slowest keeps the particles between the two of a pair the fewest: 10^6 spheres in
+    a 20 x 201 x 201 box, two threads, 105 ns per particle-step with x slowest, 81-87 with
+    y (see ``docs/performance.md``)."""
     x = np.asarray(x, dtype=np.float64)
     box = np.asarray(box, dtype=np.float64)
     nc = np.maximum((box // cell).astype(np.int64), 1)
     c = np.clip((x / np.where(box > 0, box, 1.0) * nc).astype(np.int64), 0, nc - 1)
-    key = (c[:, 0] * nc[1] + c[:, 1]) * nc[2] + c[:, 2]
+    a = np.argsort(-box, kind="stable")  # slowest axis first; ties keep x, y, z
+    key = (c[:, a[0]] * nc[a[1]] + c[:, a[1]]) * nc[a[2]] + c[:, a[2]]
     return np.argsort(key, kind="stable")
 
 

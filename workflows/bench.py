@@ -11,7 +11,8 @@ same contact model and time step; :data:`MODEL`):
 * ``rods_a4``: spherocylinders ``L/D = 4`` at ``phi = 0.5`` with friction; LAMMPS runs them
   as rigid glued-sphere rods (9 spheres, spacing ``D/2``, :mod:`workflows.glued`).
 * ``scaling``: pysim alone, spheres and rods tiled from the dense states to ``N`` up to
-  10^6 and sorted by cell (as a large initial configuration is): seconds per step and
+  10^6 and sorted by cell (:func:`pysim.neighbors.spatial_order`: row-major, the longest
+  box axis slowest; LAMMPS sorts its atoms likewise): seconds per step and
   peak memory, on 1 and on 2 threads; printed as the time per particle-step relative to
   ``N = 10^4`` (:func:`scaling_spread`).
 
@@ -329,9 +330,9 @@ def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, rep
             names = ["x", "radius"] + (["u", "length"] if kind == "rods" else [])
             for target in scaling:
                 reps = reps_for(len(d["x"]), target)
-                arrays, box = tile([d[k] for k in names], d["box"], reps,
-                                   2.0 if kind == "rods" else 1.0)
-                path = work / f"scaling_{kind}_{len(arrays[0])}_sorted.npz"
+                arrays, box = tile([d[k] for k in names], d["box"], reps)
+                # the name changes with the order, so that older states are not reused
+                path = work / f"scaling_{kind}_{len(arrays[0])}_longest_slowest.npz"
                 if not path.exists():
                     np.savez(path, box=box, **dict(zip(names, arrays)))
                 n = len(arrays[0])
