@@ -389,13 +389,34 @@ def random_spheres(diameters: np.ndarray, phi: float, seed: int, max_attempts: i
     return x, diameters, box
 
 
+#: starts of this many particles or more are written sorted by cell
+#: (:func:`pysim.neighbors.spatial_order`); smaller ones keep the insertion order, so
+#: the studies' starts (at most 6000 particles) and their results stay as they were.
+#: pysim's contact pass reads each pair's second particle, which sorting keeps close in
+#: memory. One thread, ns per particle-step in random order (as RSA inserts them) and
+#: sorted: 10^5 spheres 279 and 148; 10^4 spheres 140 and 129; 10^4 rods 239 and 236.
+SORT_MIN = 20_000
+
+
+def _by_cell(lo, box, x, *arrays):
+    """``x`` and ``arrays`` (per particle) in :func:`pysim.neighbors.spatial_order` of the
+    box ``[lo, lo + box)`` when there are :data:`SORT_MIN` particles or more."""
+    if len(x) < SORT_MIN:
+        return (x, *arrays)
+    from pysim.neighbors import spatial_order
+
+    order = spatial_order(np.asarray(x) - np.asarray(lo), np.asarray(box))
+    return tuple(np.ascontiguousarray(a[order]) for a in (x, *arrays))
+
+
 def write_initial(case: dict, path) -> None:
     """Write the random non-overlapping start of a case as a LAMMPS data file.
 
     Diameters are drawn with ``numpy.random.default_rng(seed)``, positions (and axes) by
     RSA seeded with the same ``seed``, at ``protocol.phi_init``. 3-D spheres go to an
     ``atom_style sphere`` file, everything else (rods, 2-D) to an ``atom_style
-    ellipsoid`` file (:func:`pysim.io.write_rod_data`).
+    ellipsoid`` file (:func:`pysim.io.write_rod_data`). Particles are in insertion order
+    (decreasing size), or sorted by cell from :data:`SORT_MIN` particles on.
     """
     from pysim.io import write_rod_data, write_sphere_data
 
@@ -423,6 +444,7 @@ def write_initial(case: dict, path) -> None:
         if dim == 2:
             lo[1], hi[1] = -margin, height + margin
             lo[2], hi[2] = -0.5, 0.5
+        x, u, r, length, v = _by_cell(lo, hi - lo, x, u, r, length, v)
         write_rod_data(path, x, u, r, length, hi - lo, p.get("density", 1.0), dimension=dim,
                        title=title + f" in a box of width {w:g}", box_lo=lo, v=v)
         return
@@ -433,14 +455,17 @@ def write_initial(case: dict, path) -> None:
         pr = case["protocol"]
         amp = case["gravity"] * pr["intensity"] / (2 * np.pi * pr["frequency"]) ** 2
         lo, box = container_box(dc, height, float(np.max(2 * r + length)), amp)
+        x, u, r, length = _by_cell(lo, box, x, u, r, length)
         write_rod_data(path, x, u, r, length, box, p.get("density", 1.0), title=title + " in a "
                        f"cylinder of diameter {dc:g}", box_lo=lo)
         return
     if dim == 3 and alpha == 0:
         x, d, box = random_spheres(d, phi, seed)
+        x, d = _by_cell(np.zeros(3), box, x, d)
         write_sphere_data(path, x, d, box, p.get("density", 1.0), title=title)
         return
     x, u, r, length, box = random_spherocylinders(d / 2.0, alpha * d, phi, seed, dimension=dim)
+    x, u, r, length = _by_cell(np.zeros(3), box, x, u, r, length)
     write_rod_data(path, x, u, r, length, box, p.get("density", 1.0), dimension=dim, title=title)
 
 
