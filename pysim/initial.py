@@ -416,7 +416,7 @@ def write_initial(case: dict, path) -> None:
     RSA seeded with the same ``seed``, at ``protocol.phi_init``. 3-D spheres go to an
     ``atom_style sphere`` file, everything else (rods, 2-D) to an ``atom_style
     ellipsoid`` file (:func:`pysim.io.write_rod_data`). Particles are in insertion order
-    (decreasing size), or sorted by cell from :data:`SORT_MIN` particles on.
+    (largest first), or sorted by cell from :data:`SORT_MIN` particles on.
     """
     from pysim.io import write_rod_data, write_sphere_data
 

@@ -12,6 +12,7 @@ from tests.pysim.test_deposit import DEP
 from tests.pysim.test_protocols import growth_case
 from workflows.case import validate_case
 
+
 @pytest.mark.parametrize("name, dim", [("spheres", 3), ("rods", 3), ("column", 3),
                                        ("column", 2)])
 def test_starts_from_sort_min_particles_on_are_sorted_by_cell(tmp_path, monkeypatch, name,
