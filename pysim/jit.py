@@ -27,6 +27,7 @@ import shutil
 from pathlib import Path
 
 import numba
+import numba.extending
 
 
 def _source_hash() -> str:
@@ -79,6 +80,44 @@ pnjit = numba.njit(**PARALLEL_FLAGS)
 """Decorator: ``@pnjit`` compiles a kernel whose ``prange`` loops run on threads."""
 
 prange = numba.prange
+
+
+def _prefetch_write_python(arr, offset):
+    """Plain-Python stand-in of :func:`prefetch_write` (``NUMBA_DISABLE_JIT=1``): a hint
+    only, so nothing to do."""
+
+
+def _prefetch_write_intrinsic(typingctx, arr, offset):
+    if not (isinstance(arr, numba.types.Array) and arr.layout == "C"
+            and isinstance(offset, numba.types.Integer)):
+        return None  # a typing error: C-contiguous arrays and integer offsets only
+
+    def codegen(context, builder, sig, args):
+        from llvmlite import ir
+        from numba.core import cgutils
+
+        ary = context.make_array(sig.args[0])(context, builder, args[0])
+        off = context.cast(builder, args[1], sig.args[1], numba.types.int64)
+        ptr = builder.bitcast(builder.gep(ary.data, [off]), ir.IntType(8).as_pointer())
+        i32 = ir.IntType(32)
+        fn = cgutils.get_or_insert_function(
+            builder.module, ir.FunctionType(ir.VoidType(), [ptr.type, i32, i32, i32]),
+            "llvm.prefetch.p0")
+        # write intent, keep in all cache levels, data cache
+        builder.call(fn, [ptr, ir.Constant(i32, 1), ir.Constant(i32, 3), ir.Constant(i32, 1)])
+        return context.get_dummy_value()
+
+    return numba.types.void(arr, offset), codegen
+
+
+if numba.config.DISABLE_JIT:
+    prefetch_write = _prefetch_write_python
+else:
+    prefetch_write = numba.extending.intrinsic(_prefetch_write_intrinsic)
+prefetch_write.__doc__ = """``prefetch_write(arr, offset)``: ask the CPU to bring the cache line
+of element ``offset`` of the flattened C-contiguous ``arr`` into the caches, to be written
+(LLVM's ``llvm.prefetch``; a hint: no effect on results, no fault on any address). For
+data that a kernel loads irregularly and some loop after the next one updates."""
 
 
 def set_threads(n: int) -> None:
