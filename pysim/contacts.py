@@ -837,8 +837,8 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, 
 #: listed pairs per chunk of :func:`rod_pass` (two scratches of :data:`_NA` and :data:`_NR`
 #: rows of ``RCAP`` values: 58 KiB, within L2). 128 rather than 64: the copy of the pairs in
 #: reach has twice the independent loads in flight, which counts once the particles no
-#: longer fit in the last-level cache. Contact pass of the bench's rods, ns per rod, three
-#: alternations, 1 and 2 threads: 10^6 rods 194-222 and 105-108 (with 64: 215-222 and
+#: longer fit in the last-level cache. Forces of a step of the bench's rods, ns per rod,
+#: three alternations, 1 and 2 threads: 10^6 rods 194-222 and 105-108 (with 64: 215-222 and
 #: 116-122), 10^4 rods 116-127 and 61-68 (128-134 and 65-71); 256 was slower than 128
 RCAP = 128
 # scratch A, one column per listed pair that the motion bound does not rule out: gap of the

@@ -16,6 +16,9 @@ pair it owns, or reduces over fixed blocks whose partial sums are added in block
 the order the threaded gather uses), so 1 and 2 threads give the same bits. The number of
 threads is Numba's (``NUMBA_NUM_THREADS``, default: all cores; :func:`set_threads`).
 
+One hint beyond Numba's own: :func:`prefetch_write` (``llvm.prefetch``), for the rod pass's
+scattered updates (see :func:`pysim.contacts._rod_select`).
+
 Set ``NUMBA_DISABLE_JIT=1`` to run every kernel as plain Python (slow, but with
 readable tracebacks and real coverage).
 """
@@ -116,8 +119,9 @@ else:
     prefetch_write = numba.extending.intrinsic(_prefetch_write_intrinsic)
 prefetch_write.__doc__ = """``prefetch_write(arr, offset)``: ask the CPU to bring the cache line
 of element ``offset`` of the flattened C-contiguous ``arr`` into the caches, to be written
-(LLVM's ``llvm.prefetch``; a hint: no effect on results, no fault on any address). For
-data that a kernel loads irregularly and some loop after the next one updates."""
+(LLVM's ``llvm.prefetch``; a hint: no effect on results). For data that a kernel loads
+irregularly and some loop after the next one updates. An intrinsic: its code is emitted
+in place, so the array argument costs no call and no reference counting."""
 
 
 def set_threads(n: int) -> None:

@@ -10,8 +10,8 @@ HERE = Path(__file__).resolve().parent
 
 def test_kernels_without_jit():
     env = dict(os.environ, NUMBA_DISABLE_JIT="1")
-    files = [str(HERE / f) for f in ("test_geometry.py", "test_contacts.py", "test_neighbors.py",
-                                         "test_jit.py")]
+    names = ("test_geometry.py", "test_contacts.py", "test_neighbors.py", "test_jit.py")
+    files = [str(HERE / f) for f in names]
     r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *files],
                        capture_output=True, text=True, env=env, cwd=HERE.parents[1])
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-2000:]
