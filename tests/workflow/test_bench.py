@@ -11,7 +11,7 @@ def test_tiny_bench_writes_every_case(tmp_path):
     out = tmp_path / "bench.csv"
     rows = bench.run(out, n_spheres=300, n_rods=200, steps=20, rod_steps=10, repeats=1,
                      cores=(1,), engines=("pysim", "lammps-legacy"), scaling=(300,),
-                     scaling_steps=5, scaling_work=2100, log=lambda *a: None)
+                     scaling_steps=5, scaling_work=2100, scaling_repeats=2, log=lambda *a: None)
     with open(out) as fh:
         table = list(csv.DictReader(fh))
     assert list(table[0]) == bench.FIELDS
@@ -22,6 +22,8 @@ def test_tiny_bench_writes_every_case(tmp_path):
     assert all(float(r["seconds"]) > 0 and float(r["throughput"]) > 0 for r in table)
     # a scaling point runs scaling_work particle-steps, at least scaling_steps steps
     assert {int(r["steps"]) for r in table if r["case"] == "scaling_spheres"} == {7}
+    # each scaling point is timed scaling_repeats times per core count
+    assert sum(r["case"] == "scaling_spheres" for r in table) == 2
     q = bench.ratios(rows)
     assert {(c, p) for c, _, p, *_ in q} >= {("spheres_friction", "lammps-legacy"),
                                               ("rods_a4", "lammps-rigid")}
