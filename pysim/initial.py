@@ -406,7 +406,7 @@ def _by_cell(lo, box, x, *arrays):
     from pysim.neighbors import spatial_order
 
     order = spatial_order(np.asarray(x) - np.asarray(lo), np.asarray(box))
-    return tuple(np.ascontiguousarray(a[order]) for a in (x, *arrays))
+    return tuple(a[order] for a in (x, *arrays))
 
 
 def write_initial(case: dict, path) -> None:

@@ -85,11 +85,11 @@ def dense_rods(n: int, alpha: float, phi: float, seed: int = 1):
     return st.x.copy(), st.u.copy(), st.radius.copy(), st.length.copy(), st.box.copy()
 
 
-def tile(arrays, box, reps, cell=1.0):
+def tile(arrays, box, reps):
     """Periodic images: ``reps = (kx, ky, kz)`` copies of a periodic state; positions are
-    shifted, every other per-particle array repeated, then all sorted by cells of edge
-    ``cell`` (:func:`pysim.neighbors.spatial_order`), as the dense states are: copy
-    after copy, neighbours across the faces of a copy would lie far apart in memory.
+    shifted, every other per-particle array repeated, then all sorted by cells of edge 1
+    (:func:`pysim.neighbors.spatial_order`), as pysim's large starts are: copy after
+    copy, neighbours across the faces of a copy would lie far apart in memory.
     Returns ``(arrays, box)``."""
     from pysim.neighbors import spatial_order
 
@@ -99,7 +99,7 @@ def tile(arrays, box, reps, cell=1.0):
     xs = (x[None, :, :] + shifts[:, None, :]).reshape(-1, 3)
     rest = [np.concatenate([a] * len(shifts)) for a in arrays[1:]]
     box = box * np.asarray(reps)
-    order = spatial_order(xs, box, cell)
+    order = spatial_order(xs, box)
     return [xs[order]] + [a[order] for a in rest], box
 
 
