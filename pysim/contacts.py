@@ -856,36 +856,47 @@ _NR = 38
 
 @njit
 def _rod_gather(k0, k1, pi, pj, x, u, radius, half, b0, b1, b2, p0, p1, p2, use_sep,
-                sep_sigma, sep_shrink, dcoh, fj, A, ka, kb):
-    """The listed pairs ``k0:k1`` that the motion bound does not rule out
-    (:func:`pair_pass`'s test) into the columns of scratch ``A``, ``ka`` their pair
-    indices, ``kb`` the others (every pair is copied to the next free column, which only
-    a pair kept keeps). Returns the two counts."""
+                sep_sigma, sep_shrink, reach_max, fj, A, ka, kb):
+    """The listed pairs ``k0:k1`` that the motion bound does not rule out into the
+    columns of scratch ``A``, ``ka`` their pair indices, ``kb`` the others. Returns the two
+    counts.
+
+    The bound is :func:`pair_pass`'s test with the largest reach ``reach_max`` (``2
+    max R + d_c``) for every pair, so that it reads the pair's stored separation alone:
+    the pairs it rules out are first sorted out on the pair stream, and only the pairs
+    kept load their rods. It rules out a subset of what the pair's own reach would (the
+    same for equal radii); a pair it keeps beyond reach drops out of :func:`_rod_select`
+    with the same result (no force, a zero spring)."""
     m = 0
     mo = 0
-    for k in range(k0, k1):
+    if use_sep:
+        lim = reach_max * (1.0 + 1e-9)
+        for k in range(k0, k1):  # every pair to the next free column of both lists
+            keep = not (sep_sigma * fj[SEP, k] - sep_shrink > lim)
+            ka[m] = k
+            kb[mo] = k
+            m += keep
+            mo += not keep
+    else:
+        for k in range(k0, k1):
+            ka[m] = k
+            m += 1
+    for c in range(m):
+        k = ka[c]
         i = pi[k]
         j = pj[k]
-        rj = radius[j]
-        ri = radius[i]
-        reach = ri + rj + dcoh
-        keep = not (use_sep and sep_sigma * fj[SEP, k] - sep_shrink > reach * (1.0 + 1e-9))
         d0, d1, d2 = min_image(x[j, 0] - x[i, 0], x[j, 1] - x[i, 1], x[j, 2] - x[i, 2], b0,
                                b1, b2, p0, p1, p2)
-        ka[m] = k
-        kb[mo] = k
-        A[_AD * RCAP + m] = d0
-        A[(_AD + 1) * RCAP + m] = d1
-        A[(_AD + 2) * RCAP + m] = d2
-        for c in range(3):
-            A[(_AUI + c) * RCAP + m] = u[i, c]
-            A[(_AUJ + c) * RCAP + m] = u[j, c]
-        A[_AHI * RCAP + m] = half[i]
-        A[_AHJ * RCAP + m] = half[j]
-        A[_ARI * RCAP + m] = ri
-        A[_ARJ * RCAP + m] = rj
-        m += keep
-        mo += not keep
+        A[_AD * RCAP + c] = d0
+        A[(_AD + 1) * RCAP + c] = d1
+        A[(_AD + 2) * RCAP + c] = d2
+        for e in range(3):
+            A[(_AUI + e) * RCAP + c] = u[i, e]
+            A[(_AUJ + e) * RCAP + c] = u[j, e]
+        A[_AHI * RCAP + c] = half[i]
+        A[_AHJ * RCAP + c] = half[j]
+        A[_ARI * RCAP + c] = radius[i]
+        A[_ARJ * RCAP + c] = radius[j]
     return m, mo
 
 
@@ -1126,7 +1137,7 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, stats, blk, b
 @njit
 def _rod_part(bl, bh, nt, x, v, omega, u, radius, half, b0, b1, b2, p0, p1, p2, pi, pj, istart,
               jstart, jk, hist, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt, f, torque, fj,
-              stats, blk, own, use_sep, sep_sigma, sep_shrink):
+              stats, blk, own, use_sep, sep_sigma, sep_shrink, reach_max):
     """The part of :func:`rod_pass` on blocks ``bl:bh`` (of ``nt`` parts); the one-part
     scatter compiles apart as in :func:`_sphere_part` (a step of 2000 rods, one thread:
     0.416 ms before, 0.397 after)."""
@@ -1153,7 +1164,8 @@ def _rod_part(bl, bh, nt, x, v, omega, u, radius, half, b0, b1, b2, p0, p1, p2, 
         while True:
             k1 = min(k_end, k0 + RCAP)
             ma, mo = _rod_gather(k0, k1, pi, pj, x, u, radius, half, b0, b1, b2, p0, p1,
-                                 p2, use_sep, sep_sigma, sep_shrink, dcoh, fj, A, ka, kb)
+                                 p2, use_sep, sep_sigma, sep_shrink, reach_max, fj, A, ka,
+                                 kb)
             _rod_geometry(A, ma)
             mr, mo = _rod_select(A, ma, ka, kb, mo, pi, pj, v, omega, hist, dcoh,
                                  friction, R, kr, f, torque)
@@ -1194,7 +1206,8 @@ def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart
     fcoh, dcoh = p[F_COH], p[D_COH]
     b0, b1, b2 = box[0], box[1], box[2]
     p0, p1, p2 = periodic[0], periodic[1], periodic[2]
-    use_sep = sep_sigma > 0.0 and fj.shape[0] > SEP
+    use_sep = sep_sigma > 0.0 and fj.shape[0] > SEP and n > 0
+    reach_max = 2.0 * radius.max() + dcoh if use_sep else 0.0
     nb = (n + BLOCK - 1) // BLOCK
     blk = np.zeros((nb if stats else 0, _STATS))
     nt = max(1, parts)
@@ -1204,7 +1217,7 @@ def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart
         _rod_part(bounds[t], bounds[t + 1], nt, x, v, omega, u, radius, half, b0, b1, b2, p0, p1,
                   p2, pi, pj, istart, jstart, jk, hist, law, kn, gn, kt, gt, mu, fcoh, dcoh,
                   friction, dt, f, torque, fj, stats, blk, own, use_sep, sep_sigma,
-                  sep_shrink)
+                  sep_shrink, reach_max)
     if nt > 1:
         for t in prange(nt):
             _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, jk,

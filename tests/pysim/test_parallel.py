@@ -436,23 +436,26 @@ def test_pairs_skipped_by_the_motion_bound_change_nothing(rng):
     assert skipped > 1000
 
 
+@pytest.mark.parametrize("radii", ["equal", "mixed"])
 @pytest.mark.parametrize("parts", [1, 3])
 @pytest.mark.parametrize("law", ["hooke", "hooke_no_tension", "hertz_cohesive"])
 @pytest.mark.parametrize("friction", [False, True])
-def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, parts):
+def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, parts, radii):
     """The rods loop (gather, closest points and laws on SIMD lanes, sums in pair order,
     the rows in one or three parts) gives the general loop's forces (with the reactions
     stored per pair and gathered), torques, springs, energy, contacts and virial bit for
     bit: rods of mixed lengths with spheres among them, 2-D-like parallel pairs, pairs in
     a cohesive gap, pairs skipped by the motion bound, and rows and blocks over several
-    chunks."""
+    chunks. With mixed radii the rod pass's motion bound, which takes the largest reach
+    for every pair, keeps pairs that the general pass's rules out."""
     from pysim.contacts import BLOCK, PAIR_SCRATCH, RCAP, SEP, clear_slots, rod_pass
     from pysim.neighbors import motion_bound, spine_separations
 
     n = 400
     alpha = rng.uniform(0, 3, n)
     alpha[rng.random(n) < 0.15] = 0.0  # some spheres among the rods
-    x, u, r, length, box = random_spherocylinders(np.full(n, 0.5), alpha, 0.3, 5)
+    radius = np.full(n, 0.5) if radii == "equal" else rng.choice([0.3, 0.5], n)
+    x, u, r, length, box = random_spherocylinders(radius, alpha, 0.3, 5)
     u[:40] = u[0]  # exactly parallel spines
     half = length / 2
     pi, pj, istart, jstart, jk = build_list(x, u, r + half, half, box, PER, 0.4)
@@ -493,5 +496,8 @@ def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, parts
     for k in range(5):
         assert np.array_equal(a[k], b[k], equal_nan=True), k
     assert a[5] == b[5]
-    skipped = sigma * scratch[SEP] - shrink > r[pi] + r[pj] + p[6] * 1.000000001
+    skipped = sigma * scratch[SEP] - shrink > (r[pi] + r[pj] + p[6]) * 1.000000001
     assert skipped.sum() > 10
+    if radii == "mixed":  # kept by the largest reach, skipped by the pair's own
+        kept = ~(sigma * scratch[SEP] - shrink > (2 * r.max() + p[6]) * 1.000000001)
+        assert np.sum(kept & skipped) > 10
