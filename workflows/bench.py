@@ -271,13 +271,14 @@ def _throughput(n, steps, sec):
 def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, repeats=3,
         cores=(1, 2), engines=("pysim", "lammps-legacy", "lammps-granular", "liggghts"),
         scaling=(1_000, 10_000, 100_000, 1_000_000), scaling_steps=20, scaling_work=2e7,
-        scaling_repeats=2, log=print):
+        scaling_repeats=3, log=print):
     """The whole benchmark; returns the rows written to ``out``. Each scaling point runs
     ``scaling_work`` particle-steps (at least ``scaling_steps`` steps), so that the small
     systems are timed over as long as the large ones (20 steps of 10^4 spheres take 20 ms,
     and repeated runs of them scattered by 30 %), ``scaling_repeats`` times on each core
-    count (:func:`scaling_spread` takes the fastest: single timings of 10^5 rods gave 1.50
-    and 1.36 times the 10^4 time in two runs of the same code)."""
+    count, in rounds over all points (:func:`scaling_spread` takes the fastest: single
+    timings of 10^5 rods gave 1.50 and 1.36 times the 10^4 time in two runs of the same
+    code, and the machine's speed drifts by 10-20 % over minutes)."""
     out = Path(out).resolve()  # the peers run in the work folder: paths must be absolute
     work = out.parent / "bench"
     busy = busy_cores()
@@ -327,6 +328,7 @@ def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, rep
                                       meff=m_rod / 2), work)
                 add("rods_a4", "lammps-rigid", c, n_rods, rod_steps, sec)
     if "pysim" in engines:
+        points = []
         for kind in ("spheres", "rods"):
             d = np.load(st[kind].with_suffix(".npz"))
             names = ["x", "radius"] + (["u", "length"] if kind == "rods" else [])
@@ -338,14 +340,16 @@ def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, rep
                 if not path.exists():
                     np.savez(path, box=box, **dict(zip(names, arrays)))
                 n = len(arrays[0])
-                nsteps = max(scaling_steps, int(round(scaling_work / n)))
-                for _ in range(scaling_repeats):
-                    for c in cores:
-                        r = run_pysim(path, c, nsteps, True)
-                        add(f"scaling_{kind}", "pysim", c, n, nsteps, r["seconds"],
-                            bytes_per_particle=round((r["peak_rss"] - r["base_rss"]) / n),
-                            peak_mib=round(r["peak_rss"] / 2**20),
-                            list_rebuilds=r["rebuilds"])
+                points.append((kind, path, n, max(scaling_steps, int(round(scaling_work / n)))))
+        # every point once per round, so that a slow spell of the machine slows one
+        # timing of every size rather than both timings of one size
+        for _ in range(scaling_repeats):
+            for kind, path, n, nsteps in points:
+                for c in cores:
+                    r = run_pysim(path, c, nsteps, True)
+                    add(f"scaling_{kind}", "pysim", c, n, nsteps, r["seconds"],
+                        bytes_per_particle=round((r["peak_rss"] - r["base_rss"]) / n),
+                        peak_mib=round(r["peak_rss"] / 2**20), list_rebuilds=r["rebuilds"])
     out.parent.mkdir(parents=True, exist_ok=True)
     with open(out, "w", newline="") as fh:
         w = csv.DictWriter(fh, FIELDS, extrasaction="ignore")
@@ -444,7 +448,7 @@ def main(argv=None) -> int:
                     help="fewest steps per scaling point")
     ap.add_argument("--scaling-work", type=float, default=2e7,
                     help="particle-steps per scaling point (steps = work / N)")
-    ap.add_argument("--scaling-repeats", type=int, default=2,
+    ap.add_argument("--scaling-repeats", type=int, default=3,
                     help="timings of each scaling point on each core count (the fastest counts)")
     ap.add_argument("--cores", default="1,2")
     a = ap.parse_args(argv)
