@@ -461,10 +461,12 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
 #: listed pairs per chunk of :func:`sphere_pass`. Its scratch holds ``_NS`` rows of ``CAP``
 #: values; with a stride known at compile time the compiler can tell that the rows do not
 #: overlap, and runs :func:`_sphere_laws` on SIMD lanes (it gives up on runtime strides:
-#: too many arrays to check for overlap). Every index into a scratch, and every index loaded
-#: from an array (pair and particle numbers), is cast to ``np.uint64``: Numba wraps a signed
-#: index that LLVM cannot prove non-negative (``a[-1]``), three instructions per access, and
-#: it cannot prove it for a chunk's columns. Forces of the bench's 10^4 spheres, one thread,
+#: too many arrays to check for overlap). The column indices into the scratches (``S``, and
+#: the rods' ``A`` and ``R``) and the pair and particle numbers loaded from arrays in the hot
+#: loops are cast to ``np.uint64``: Numba wraps a signed index that LLVM cannot prove
+#: non-negative (``a[-1]``), three instructions per access, and it cannot prove it for a
+#: chunk's columns (the small index lists ``kk``, ``ka``... are still written with signed
+#: counters). Forces of the bench's 10^4 spheres, one thread,
 #: three alternations: 104-112 ns per sphere with signed indices, 93-101 unsigned
 CAP = 128
 # rows of the scratch: inputs (gap d, |d|^2, radii, velocities and spins of i and j, spring),

@@ -13,8 +13,9 @@ same contact model and time step; :data:`MODEL`):
 * ``scaling``: pysim alone, spheres and rods tiled from the dense states to ``N`` up to
   10^6 and sorted by cell (:func:`pysim.neighbors.spatial_order`: row-major, the longest
   box axis slowest; LAMMPS sorts its atoms likewise): seconds per step and
-  peak memory, on 1 and on 2 threads, each point timed twice; printed as the time per
-  particle-step (the faster timing) relative to ``N = 10^4`` (:func:`scaling_spread`).
+  peak memory, on 1 and on 2 threads, each point timed three times in rounds over all
+  points; printed as the time per particle-step (the fastest timing) relative to
+  ``N = 10^4`` (:func:`scaling_spread`).
 
 Every timing is the engine's own loop time (LAMMPS/LIGGGHTS ``Loop time``; pysim the
 wall time of ``Simulation.run``), in a fresh process, engines alternating within each
