@@ -79,8 +79,10 @@ SEP = 6
 PAIR_SCRATCH = 7
 #: rows per block of the parallel pair loop (fixed: results never depend on threads)
 BLOCK = 64
-#: columns of a block's partial sums: elastic energy, contacts, virial (9)
-_STATS = 11
+#: columns of a block's partial sums: elastic energy, contacts, virial (9), then the block's
+#: largest overlap fraction ``delta / (2 min(R_i, R_j))`` and its pair plus one (0: none)
+_STATS = 13
+_WORST, _WORST_K = 11, 12
 
 
 @njit
@@ -188,6 +190,31 @@ def pair_force(g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, ri, rj, vi0, vi1, vi2,
             x2 = 0.0
     return (-fn * n0 + ft0, -fn * n1 + ft1, -fn * n2 + ft2, c0, c1, c2, e0, e1, e2, n0, n1,
             n2, delta, x0, x1, x2)
+
+
+@inline_njit
+def _note_overlap(blk, b, delta, ri, rj, k):
+    """Keep pair ``k``'s overlap as a fraction of the smaller diameter in block ``b``'s
+    record when it is the block's largest so far (pairs run in pair order within a block,
+    so the first pair of the largest is kept)."""
+    if delta > 0.0:
+        frac = delta / (2.0 * min(ri, rj))
+        if frac > blk[b, _WORST]:
+            blk[b, _WORST] = frac
+            blk[b, _WORST_K] = k + 1.0
+
+
+@njit
+def block_worst(blk, worst):
+    """The largest overlap fraction over the blocks and the first pair where it occurs,
+    written to ``worst = (fraction, k)`` (``(-inf, -1)`` when no pair overlaps): what
+    :func:`worst_overlap` returns for the pairs of the pass, with no pass of its own."""
+    worst[0] = -np.inf
+    worst[1] = -1.0
+    for b in range(blk.shape[0]):
+        if blk[b, _WORST_K] > 0.0 and blk[b, _WORST] > worst[0]:
+            worst[0] = blk[b, _WORST]
+            worst[1] = blk[b, _WORST_K] - 1.0
 
 
 @njit
@@ -301,7 +328,7 @@ def _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter):
 @pnjit
 def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, jk, hist, law,
               p, friction, dt, rods, f, torque, fj, stats, virial, sep_sigma=0.0,
-              sep_shrink=0.0, scatter=False):
+              sep_shrink=0.0, scatter=False, worst=None):
     """Forces and torques of every listed pair on its first particle, written to
     ``f``/``torque`` (overwritten: row sums), and the reaction on the second particle
     stored per pair in ``fj`` (force, torque; zero out of contact; at the pair's place in
@@ -320,7 +347,11 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
     ``scatter`` (the rows run in order, on one thread) adds the reactions straight
     to ``f``/``torque`` of the second particle instead of storing them in ``fj``: when row
     ``i`` is reached its reactions are complete, and it writes ``f_i = row sum + reaction
-    sum``, the same bits as :func:`reduce_pass` gives (no ``reduce_pass`` gather needed)."""
+    sum``, the same bits as :func:`reduce_pass` gives (no ``reduce_pass`` gather needed).
+
+    With ``stats`` and a ``worst`` array (2,), also writes the largest overlap and its
+    pair (:func:`block_worst`); not with ``end_bonds``, whose bonds are not the closest
+    points (``worst`` is then left as it was)."""
     n = x.shape[0]
     kn, gn, kt, gt, mu = p[K_N], p[GAMMA_N], p[K_T], p[GAMMA_T], p[MU]
     fcoh, dcoh = p[F_COH], p[D_COH]
@@ -422,6 +453,8 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
                     r2 -= e0 * B1 - e1 * B0
                     if stats and delta > 0.0:
                         pe += elastic_energy(law, kn, delta, ri + rj)
+                        if not ends:
+                            _note_overlap(blk, b, delta, ri, rj, k)
                 if not touching:
                     if friction:
                         hist[k, 0] = 0.0
@@ -454,6 +487,8 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
                     blk[b, 10] += d2 * F2
             _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter)
     if stats:
+        if worst is not None and not ends:
+            block_worst(blk, worst)
         return block_totals(blk, virial)
     return 0.0, 0
 
@@ -707,8 +742,10 @@ def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torqu
         if stats:
             delta = S[np.uint64(_DELTA * CAP + m)]
             if delta > 0.0:
-                rs = S[np.uint64(_RI * CAP + m)] + S[np.uint64(_RJ * CAP + m)]
-                blk[b, 0] += elastic_energy(law, kn, delta, rs)
+                ri = S[np.uint64(_RI * CAP + m)]
+                rj = S[np.uint64(_RJ * CAP + m)]
+                blk[b, 0] += elastic_energy(law, kn, delta, ri + rj)
+                _note_overlap(blk, b, delta, ri, rj, k)
             blk[b, 1] += 1.0
             d0 = S[np.uint64(_D * CAP + m)]
             d1 = S[np.uint64((_D + 1) * CAP + m)]
@@ -787,7 +824,7 @@ def _sphere_part(bl, bh, nt, x, v, omega, radius, b0, b1, b2, p0, p1, p2, pi, pj
 
 @pnjit
 def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, hist, law, p,
-                friction, dt, f, torque, fj, stats, virial, parts=1):
+                friction, dt, f, torque, fj, stats, virial, parts=1, worst=None):
     """:func:`pair_pass` for spheres only (every ``L = 0``): the same equations and the
     same outputs, several times faster. The normal passes through both centres, so
     normal forces exert no torque; with friction the tangential force does, ``c x F_t``
@@ -817,7 +854,7 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, 
     :func:`_sphere_gather` copies the pairs in reach into a scratch, one column each,
     :func:`_sphere_laws` evaluates their laws on SIMD lanes, and :func:`_sphere_scatter`
     adds the forces in pair order. The row sums carry over from chunk to chunk, so the
-    sums, and the bits, do not depend on the chunks."""
+    sums, and the bits, do not depend on the chunks. ``worst`` as in :func:`pair_pass`."""
     n = x.shape[0]
     kn, gn, kt, gt, mu = p[K_N], p[GAMMA_N], p[K_T], p[GAMMA_T], p[MU]
     fcoh, dcoh = p[F_COH], p[D_COH]
@@ -837,6 +874,8 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, 
             _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, jk,
                         fj.reshape(-1), f, torque, own, True)
     if stats:
+        if worst is not None:
+            block_worst(blk, worst)
         return block_totals(blk, virial)
     return 0.0, 0
 
@@ -1121,6 +1160,8 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, stats, blk, b
         if stats:
             blk[b, 0] += R[np.uint64(_RPE * RCAP + m)]
             blk[b, 1] += 1.0
+            _note_overlap(blk, b, R[np.uint64(_RDELTA * RCAP + m)], R[np.uint64(_RRI * RCAP + m)],
+                          R[np.uint64(_RRJ * RCAP + m)], k)
             d0 = R[np.uint64(_RD * RCAP + m)]
             d1 = R[np.uint64((_RD + 1) * RCAP + m)]
             d2 = R[np.uint64((_RD + 2) * RCAP + m)]
@@ -1203,7 +1244,7 @@ def _rod_part(bl, bh, nt, x, v, omega, u, radius, half, b0, b1, b2, p0, p1, p2, 
 @pnjit
 def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart, jk, hist, law,
              p, friction, dt, f, torque, fj, stats, virial, sep_sigma=0.0, sep_shrink=0.0,
-             parts=1):
+             parts=1, worst=None):
     """:func:`pair_pass` for rods with one bond per pair (not ``end_bonds``): the same
     equations, sums and outputs in the same order (the same bits), in chunks of
     :data:`RCAP` listed pairs and five loops: gather the pairs the motion bound does not
@@ -1211,7 +1252,8 @@ def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart
     (:func:`_rod_geometry`), the pairs in reach with their velocities
     (:func:`_rod_select`), their laws on SIMD lanes (:func:`_rod_laws`), and the sums
     in pair order (:func:`_rod_scatter`). ``pi`` the first member of each pair; the
-    parts and the complete forces as in :func:`sphere_pass`."""
+    parts and the complete forces as in :func:`sphere_pass`; ``worst`` as in
+    :func:`pair_pass`."""
     n = x.shape[0]
     kn, gn, kt, gt, mu = p[K_N], p[GAMMA_N], p[K_T], p[GAMMA_T], p[MU]
     fcoh, dcoh = p[F_COH], p[D_COH]
@@ -1234,6 +1276,8 @@ def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart
             _close_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), jstart, jk,
                         fj.reshape(-1), f, torque, own, False)
     if stats:
+        if worst is not None:
+            block_worst(blk, worst)
         return block_totals(blk, virial)
     return 0.0, 0
 

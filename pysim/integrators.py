@@ -50,8 +50,12 @@ SQRT_HALF = np.sqrt(0.5)
 
 # indices into the 'sys' scalar array
 (GAMMA_BG, GAMMA_ROT, GX, GY, GZ, EPS_X, EPS_Y, EPS_Z, GROWTH, SKIN, RINT_BUILD, K_D,
- RC_BUILD, HALF_BUILD, RODS, DIM2, SEP_SIGMA, SEP_SHRINK, PARTS, SLOT_PARTS) = range(20)
-SYS_SIZE = 20
+ RC_BUILD, HALF_BUILD, RODS, DIM2, SEP_SIGMA, SEP_SHRINK, PARTS, SLOT_PARTS, WORST_OVERLAP,
+ WORST_PAIR) = range(22)
+SYS_SIZE = 22
+#: ``sys[WORST_PAIR]`` when the last force evaluation with statistics could not tell the
+#: largest overlap (``end_bonds`` rods): :func:`pysim.contacts.worst_overlap` must
+WORST_UNKNOWN = -2.0
 
 #: The pair arrays, passed and returned in this order by the kernels: the Verlet list
 #: (:func:`pysim.neighbors.build_list`: ``pi``, ``pj``, ``istart``, ``jstart``, ``jk``),
@@ -65,7 +69,10 @@ SYS_SIZE = 20
 #: ``sys[PARTS]``: the threads the kernels run on, the parts of the contact pass
 #: (:func:`forces`); ``sys[SLOT_PARTS]``: the parts for which the reaction slots of the
 #: shared particles in ``fj`` hold zero (:func:`pysim.contacts.clear_slots`; 0 after a
-#: list build).
+#: list build). ``sys[WORST_OVERLAP]``, ``sys[WORST_PAIR]``: the largest overlap as a
+#: fraction of the smaller diameter and its pair (``-inf``, -1: none) at the last
+#: :func:`forces` with ``stats`` (:func:`pysim.contacts.block_worst`), for the blow-up
+#: check, or ``WORST_UNKNOWN``.
 PAIR_ARRAYS = ("pi", "pj", "istart", "jstart", "jk", "hist", "fj")
 
 
@@ -85,6 +92,17 @@ def wrap(x, box, periodic):
         for k in range(3):
             if periodic[k]:
                 x[i, k] = wrap1(x[i, k], box[k])
+
+
+@njit
+def all_finite(x, v):
+    """True when every position and velocity is finite (one pass, no temporaries: the
+    blow-up check after every run)."""
+    for i in range(x.shape[0]):
+        for k in range(3):
+            if not (np.isfinite(x[i, k]) and np.isfinite(v[i, k])):
+                return False
+    return True
 
 
 @njit
@@ -165,8 +183,9 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, js
            f, torque, virial, stats):
     """Overwrite ``f``, ``torque`` with pair contacts, walls, gravity ``m g``, drag
     ``-gamma_bg v`` and ``-gamma_rot omega`` (added in that order). With ``stats`` also
-    the virial and returns ``(elastic energy, pair contacts, wall contacts)``; without,
-    the virial is left as it was and the first two are zero."""
+    the virial and the largest overlap (``sys[WORST_OVERLAP]``, ``sys[WORST_PAIR]``), and
+    returns ``(elastic energy, pair contacts, wall contacts)``; without, the virial and
+    the overlap are left as they were and the first two are zero."""
     # the sphere and rod passes write complete pair forces on any number of threads (one
     # part of the rows per thread); the general pass does on one thread only (scatter),
     # else reduce_pass adds the stored reactions. The same bits either way.
@@ -176,19 +195,23 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, js
     if not ends and parts > 1 and sys[SLOT_PARTS] != parts:
         clear_slots(istart, jstart, jk, fj, parts, sys[RODS] == 0.0)
         sys[SLOT_PARTS] = parts
+    worst = sys[WORST_OVERLAP:WORST_PAIR + 1]  # a view: the passes write the overlap there
     if ends:
         scatter = parts == 1
         pe, nc = pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, jk,
                            hist, law, cp, friction, dt, True, f, torque, fj, stats, virial,
                            sys[SEP_SIGMA], sys[SEP_SHRINK], scatter)
         sys[SLOT_PARTS] = 0.0  # it wrote every slot
+        if stats:
+            sys[WORST_PAIR] = WORST_UNKNOWN
     elif sys[RODS] != 0.0:
         pe, nc = rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart,
                           jk, hist, law, cp, friction, dt, f, torque, fj, stats, virial,
-                          sys[SEP_SIGMA], sys[SEP_SHRINK], parts)
+                          sys[SEP_SIGMA], sys[SEP_SHRINK], parts, worst)
     else:
         pe, nc = sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk,
-                             hist, law, cp, friction, dt, f, torque, fj, stats, virial, parts)
+                             hist, law, cp, friction, dt, f, torque, fj, stats, virial, parts,
+                             worst)
     gx, gy, gz = sys[GX], sys[GY], sys[GZ]
     gb = sys[GAMMA_BG]
     gr = sys[GAMMA_ROT]

@@ -287,8 +287,9 @@ def test_sphere_pass_equals_the_general_pass(rng, friction, law, parts):
     """The spheres-only loop (gather, SIMD laws, scatter, in chunks of listed pairs, the
     rows in one or three parts) gives the general loop's forces, torques, springs, energy
     and virial, for the linear law and for Hertz with cohesion (pairs in a cohesive gap);
-    rows and blocks span several chunks."""
-    from pysim.contacts import BLOCK, CAP, clear_slots, pair_pass, sphere_pass
+    rows and blocks span several chunks. Both report the largest overlap and its pair
+    as :func:`worst_overlap` finds them."""
+    from pysim.contacts import BLOCK, CAP, clear_slots, pair_pass, sphere_pass, worst_overlap
     from pysim.neighbors import build_list
 
     n = 300
@@ -310,16 +311,19 @@ def test_sphere_pass_equals_the_general_pass(rng, friction, law, parts):
         tq = np.zeros((n, 3))
         fj = np.full((6, len(pj)), np.nan)  # the general pass writes every slot
         vir = np.zeros((3, 3))
+        worst = np.full(2, np.nan)
         if kernel == "general":
             pe, nc = pair_pass(x, v, w, u, r, half, box, per, pj, istart, jstart, jk, hist,
                                law_id, p, friction, 1e-4, False, f, tq, fj, True, vir, 0.0, 0.0,
-                               True)
+                               True, worst)
         else:
             clear_slots(istart, jstart, jk, fj, parts, True)
             pe, nc = sphere_pass(x, v, w, r, box, per, pi, pj, istart, jstart, jk, hist,
-                                 law_id, p, friction, 1e-4, f, tq, fj, True, vir, parts)
+                                 law_id, p, friction, 1e-4, f, tq, fj, True, vir, parts, worst)
             assert np.all(np.isnan(fj) | (fj == 0.0))  # slots read are left at zero
+        assert tuple(worst) == worst_overlap(x, u, r, half, box, per, pi, pj, False)
         out.append((f, tq, vir, hist, pe, nc))
+    assert out[0][5] and worst[0] > 0.05  # deep overlaps: the fraction is tested
     (a, b) = out
     assert a[5] == b[5] > 100
     # the general loop's normal forces leave rounding torques, of the forces' rounding
@@ -448,7 +452,8 @@ def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, parts
     a cohesive gap, pairs skipped by the motion bound, and rows and blocks over several
     chunks. With mixed radii the rod pass's motion bound, which takes the largest reach
     for every pair, keeps pairs that the general pass's rules out."""
-    from pysim.contacts import BLOCK, PAIR_SCRATCH, RCAP, SEP, clear_slots, rod_pass
+    from pysim.contacts import (BLOCK, PAIR_SCRATCH, RCAP, SEP, clear_slots, rod_pass,
+                                worst_overlap)
     from pysim.neighbors import motion_bound, spine_separations
 
     n = 400
@@ -478,18 +483,22 @@ def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, parts
         fj = scratch.copy()
         fj[:SEP] = np.nan
         h = hist0.copy()
+        worst = np.full(2, np.nan)
         if kernel == "general":
             pe, nc = pair_pass(x, v, w, u, r, half, box, PER, pj, istart, jstart, jk, h, law_id, p,
                                friction, 1e-4, True, f, tq, fj, True, vir, sigma, shrink,
-                               False)
+                               False, worst)
             reduce_pass(f, tq, jstart, fj, v, w, np.ones(n), 0.0, 0.0, 0.0, 0.0, 0.0,
                         False)
         else:
             clear_slots(istart, jstart, jk, fj, parts, False)
             pe, nc = rod_pass(x, v, w, u, r, half, box, PER, pi, pj, istart, jstart, jk, h,
                               law_id, p, friction, 1e-4, f, tq, fj, True, vir, sigma, shrink,
-                              parts)
+                              parts, worst)
             assert np.all(np.isnan(fj[:SEP]) | (fj[:SEP] == 0.0))
+        # the largest overlap and its pair, as a pass of its own finds them
+        assert tuple(worst) == worst_overlap(x, u, r, half, box, PER, pi, pj, True)
+        assert worst[0] > 0.01
         out.append((f, tq, h, vir, fj[SEP:], pe, nc))
     a, b = out
     assert a[6] == b[6] > 100

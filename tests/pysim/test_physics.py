@@ -311,6 +311,31 @@ def test_blow_up_is_reported_with_step_and_particles():
         sim.run(100)
 
 
+@pytest.mark.parametrize("spine_contact", ["closest", "end_bonds"])
+def test_rod_blow_up_is_reported_with_the_overlap_of_the_last_forces(spine_contact):
+    """Two rods driven into each other side by side: the overlap the check reports is the
+    closest-point overlap of the final state, whether the contact pass found it
+    (``closest``) or the check had to search the pairs itself (``end_bonds``)."""
+    from pysim.contacts import worst_overlap
+
+    x = np.array([[2.0, 3.0, 3.0], [3.02, 3.0, 3.0], [5.0, 5.0, 1.0]])
+    axis = np.tile([0.0, 1.0, 0.0], (3, 1))
+    v = np.array([[10.0, 0, 0], [-10.0, 0, 0], [0, 0, 0]])
+    st = State.create(x, np.full(3, 0.5), np.array([2.0, 2.0, 0.0]), np.full(3, 8.0),
+                      axis=axis, v=v)
+    sim = Simulation(st, ContactModel("hooke", 1e3, 0.0, spine_contact=spine_contact),
+                     dt=1e-3, max_overlap=0.5)
+    sim.run(10)  # below the limit: no error
+    s = sim.state
+    frac, k = worst_overlap(s.x, s.u, s.radius, sim.half, s.box, s.periodic, sim.pi, sim.pj,
+                            True)
+    assert 0.05 < frac < 0.5
+    sim.max_overlap = 0.9 * frac
+    with pytest.raises(BlowUpError, match=rf"overlap {frac:.3g} of a diameter between "
+                       r"particles \(0-based\) 0 and 1 at step 10 exceeds"):
+        sim._check("test")
+
+
 def test_time_step_above_contact_time_is_refused():
     x, d, box = random_spheres(np.ones(50), 0.3, seed=1)
     with pytest.raises(ValueError, match="above 1/10 of the contact time"):
