@@ -10,7 +10,7 @@ from workflows.glued import glued_spheres, write_glued_rods_data
 def test_tiny_bench_writes_every_case(tmp_path):
     out = tmp_path / "bench.csv"
     rows = bench.run(out, n_spheres=300, n_rods=200, steps=20, rod_steps=10, repeats=1,
-                     cores=(1,), engines=("pysim", "lammps-legacy"), scaling=(300, 600),
+                     cores=(1,), engines=("pysim", "lammps-legacy"), scaling=(300, 310, 600),
                      scaling_steps=5, scaling_work=2100, scaling_repeats=2, log=lambda *a: None)
     with open(out) as fh:
         table = list(csv.DictReader(fh))
@@ -23,11 +23,13 @@ def test_tiny_bench_writes_every_case(tmp_path):
     # a scaling point runs scaling_work particle-steps, at least scaling_steps steps
     assert {(int(r["n"]), int(r["steps"])) for r in table
             if r["case"] == "scaling_spheres"} == {(300, 7), (600, 5)}
-    # each scaling point is timed scaling_repeats times per core count, in rounds over
-    # all points (a slow spell of the machine then slows one timing of each)
+    # each scaling size is timed scaling_repeats times per core count, in rounds over
+    # all sizes (a slow spell of the machine then slows one timing of each), once per
+    # round even where two targets tile to it (310 spheres tile to 300; rods of 200
+    # tile to 200, 400 and 600)
     points = [(r["case"], int(r["n"])) for r in table if r["case"].startswith("scaling")]
-    assert len(points) == 8 and points[:4] == points[4:]
-    assert len(set(points)) == 4
+    assert len(points) == 10 and points[:5] == points[5:]
+    assert len(set(points)) == 5
     q = bench.ratios(rows)
     assert {(c, p) for c, _, p, *_ in q} >= {("spheres_friction", "lammps-legacy"),
                                               ("rods_a4", "lammps-rigid")}
