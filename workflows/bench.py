@@ -335,14 +335,14 @@ def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, rep
             names = ["x", "radius"] + (["u", "length"] if kind == "rods" else [])
             for target in scaling:
                 reps = reps_for(len(d["x"]), target)
-                arrays, box = tile([d[k] for k in names], d["box"], reps)
+                n = len(d["x"]) * int(np.prod(reps))
                 # the name changes with the order, so that older states are not reused
-                path = work / f"scaling_{kind}_{len(arrays[0])}_longest_slowest.npz"
+                path = work / f"scaling_{kind}_{n}_longest_slowest.npz"
                 if any(path == q[1] for q in points):
                     continue  # a target that tiles to a size already listed (10^3 -> 10^4)
-                if not path.exists():
+                if not path.exists():  # tile and sort only once (10^6: seconds)
+                    arrays, box = tile([d[k] for k in names], d["box"], reps)
                     np.savez(path, box=box, **dict(zip(names, arrays)))
-                n = len(arrays[0])
                 points.append((kind, path, n, max(scaling_steps, int(round(scaling_work / n)))))
         # every point once per round, so that a slow spell of the machine slows one
         # timing of every size rather than both timings of one size
