@@ -667,8 +667,8 @@ def _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
         t1 = vr1 - vt * n1
         t2 = vr2 - vt * n2
         f0, f1, f2, x0, x1, x2 = tangential_force(
-            kt, gt, mu, fn, S[np.uint64(_H * CAP + m)], S[np.uint64((_H + 1) * CAP + m)], S[np.uint64((_H + 2) * CAP + m)], n0,
-            n1, n2, t0, t1, t2, dt)
+            kt, gt, mu, fn, S[np.uint64(_H * CAP + m)], S[np.uint64((_H + 1) * CAP + m)],
+            S[np.uint64((_H + 2) * CAP + m)], n0, n1, n2, t0, t1, t2, dt)
         # out of contact (a cohesive gap): no tangential force, the spring restarts
         f0 = f0 if touch else 0.0
         f1 = f1 if touch else 0.0
@@ -1068,12 +1068,12 @@ def _rod_laws(R, mr, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
         wj0 = R[np.uint64(_RWJ * RCAP + m)]
         wj1 = R[np.uint64((_RWJ + 1) * RCAP + m)]
         wj2 = R[np.uint64((_RWJ + 2) * RCAP + m)]
-        vr0 = (R[np.uint64(_RVI * RCAP + m)] + (wi1 * c2 - wi2 * c1) - R[np.uint64(_RVJ * RCAP + m)]
-               - (wj1 * e2 - wj2 * e1))
-        vr1 = (R[np.uint64((_RVI + 1) * RCAP + m)] + (wi2 * c0 - wi0 * c2) - R[np.uint64((_RVJ + 1) * RCAP + m)]
-               - (wj2 * e0 - wj0 * e2))
-        vr2 = (R[np.uint64((_RVI + 2) * RCAP + m)] + (wi0 * c1 - wi1 * c0) - R[np.uint64((_RVJ + 2) * RCAP + m)]
-               - (wj0 * e1 - wj1 * e0))
+        vr0 = (R[np.uint64(_RVI * RCAP + m)] + (wi1 * c2 - wi2 * c1)
+               - R[np.uint64(_RVJ * RCAP + m)] - (wj1 * e2 - wj2 * e1))
+        vr1 = (R[np.uint64((_RVI + 1) * RCAP + m)] + (wi2 * c0 - wi0 * c2)
+               - R[np.uint64((_RVJ + 1) * RCAP + m)] - (wj2 * e0 - wj0 * e2))
+        vr2 = (R[np.uint64((_RVI + 2) * RCAP + m)] + (wi0 * c1 - wi1 * c0)
+               - R[np.uint64((_RVJ + 2) * RCAP + m)] - (wj0 * e1 - wj1 * e0))
         vn = vr0 * n0 + vr1 * n1 + vr2 * n2
         touch = delta > 0.0
         fn = normal_force(law, kn, gn, delta, vn, rs) if touch else 0.0
