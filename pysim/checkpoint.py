@@ -98,4 +98,5 @@ def load(path) -> tuple[Simulation, dict]:
         sim.u_ref = state.u.copy() if sys[RODS] else np.zeros((0, 3))
         sim._rebuild()
         sim.rebuilds -= 1
+    sim._dl = sim._motion_shares()
     return sim, meta["extra"]

@@ -150,19 +150,23 @@ def rebuild(x, u, box, periodic, r_int, half, sys, old_istart, old_pj, old_hist,
 
 @njit
 def maybe_rebuild(x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist,
-                  fj, x_ref, u_ref, box_ref):
+                  fj, x_ref, u_ref, box_ref, dl=None):
     """Rebuild the pair list (carrying the tangential history) when an unlisted pair
     could come into contact (:func:`pysim.neighbors.list_is_stale`). Returns the pair
-    arrays and whether it rebuilt."""
+    arrays and whether it rebuilt. ``dl``: each particle's share of the motion bound,
+    written here (:func:`pysim.neighbors.motion_bound`; zero after a build) for
+    :func:`forces`."""
     growth = max_of(r_int) / sys[RINT_BUILD] if sys[RINT_BUILD] > 0 else 1.0
     sigma, shrink = motion_bound(x, x_ref, u, u_ref, half, box, box_ref, periodic,
-                                 sys[HALF_BUILD], growth)
+                                 sys[HALF_BUILD], growth, dl)
     if not stale_by_bound(sigma, shrink, sys[RC_BUILD], sys[SKIN], growth):
         sys[SEP_SIGMA] = sigma
         sys[SEP_SHRINK] = shrink
         return pi, pj, istart, jstart, jk, hist, fj, False
     pi, pj, istart, jstart, jk, hist, fj = rebuild(x, u, box, periodic, r_int, half, sys,
                                                    istart, pj, hist, fj, x_ref, u_ref, box_ref)
+    if dl is not None:
+        dl[:] = 0.0  # the state is the build's
     return pi, pj, istart, jstart, jk, hist, fj, True
 
 
@@ -180,12 +184,14 @@ def _body(f, torque, v, omega, mass, gx, gy, gz, gb, gr):
 @njit
 def forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, jstart, jk, hist,
            fj, law, cp, friction, planes, cyls, wp, wfriction, whist, wall_force, sys, t, dt,
-           f, torque, virial, stats):
+           f, torque, virial, stats, dl=None):
     """Overwrite ``f``, ``torque`` with pair contacts, walls, gravity ``m g``, drag
     ``-gamma_bg v`` and ``-gamma_rot omega`` (added in that order). With ``stats`` also
     the virial and the largest overlap (``sys[WORST_OVERLAP]``, ``sys[WORST_PAIR]``), and
     returns ``(elastic energy, pair contacts, wall contacts)``; without, the virial and
-    the overlap are left as they were and the first two are zero."""
+    the overlap are left as they were and the first two are zero. ``dl``: the particles'
+    shares of the motion bound that :func:`maybe_rebuild` wrote with ``sys[SEP_SIGMA]``
+    (rods skip the pairs it keeps out of reach; the same forces)."""
     # the sphere and rod passes write complete pair forces on any number of threads (one
     # part of the rows per thread); the general pass does on one thread only (scatter),
     # else reduce_pass adds the stored reactions. The same bits either way.
@@ -207,7 +213,7 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, js
     elif sys[RODS] != 0.0:
         pe, nc = rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart,
                           jk, hist, law, cp, friction, dt, f, torque, fj, stats, virial,
-                          sys[SEP_SIGMA], sys[SEP_SHRINK], parts, worst)
+                          sys[SEP_SIGMA], sys[SEP_SHRINK], parts, worst, dl)
     else:
         pe, nc = sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk,
                              hist, law, cp, friction, dt, f, torque, fj, stats, virial, parts,
@@ -458,7 +464,7 @@ RETURN_PAIRS = 1 << 13
 def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia, box,
                  periodic, pi, pj, istart, jstart, jk, hist, fj, x_ref, u_ref, box_ref, law, cp,
                  friction, planes, cyls, wp, wfriction, whist, wall_force, sys, clock, dt, nsteps,
-                 virial):
+                 virial, dl):
     """Advance ``nsteps`` velocity-Verlet steps (see the module doc).
 
     ``clock = (t_seg, s_seg, step0)``: the time after step ``k`` of this call is
@@ -468,8 +474,10 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
     the final state on exit (the virial too). With a list of at least
     :data:`RETURN_PAIRS` pairs it returns after the step that rebuilds the list, so that
     the caller drops the old list before the next rebuild (a call that rebuilt twice
-    would hold three lists at once). Returns ``(pair arrays (7), elastic energy, pair
-    contacts, wall contacts, rebuilds, steps done)``.
+    would hold three lists at once). ``dl``: scratch of n values for the particles' shares
+    of the motion bound (:func:`maybe_rebuild`), or none (empty): the rods' contact pass
+    then skips by the largest share alone. Returns ``(pair arrays (7), elastic energy,
+    pair contacts, wall contacts, rebuilds, steps done)``.
     """
     h = 0.5 * dt
     pe = 0.0
@@ -500,13 +508,13 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
                            box, periodic, h, dt, dim2, scale, deform, sc, sc3, sc5)
         pi, pj, istart, jstart, jk, hist, fj, rebuilt = maybe_rebuild(
             x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,
-            u_ref, box_ref)
+            u_ref, box_ref, dl)
         last = (rebuilt and pj.shape[0] >= RETURN_PAIRS) or k == nsteps - 1
         if rebuilt:
             rebuilds += 1
         pe, nc, nw = forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart,
                             jstart, jk, hist, fj, law, cp, friction, planes, cyls, wp, wfriction,
-                            whist, wall_force, sys, t, dt, f, torque, virial, last)
+                            whist, wall_force, sys, t, dt, f, torque, virial, last, dl)
         for kk in range(3):
             box[kk] *= scale[kk]
         if last:

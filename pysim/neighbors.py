@@ -378,7 +378,7 @@ def transfer_rows(old_start, old_pj, old_hist, new_start, new_pj):
 
 
 @pnjit
-def motion_bound(x, x_ref, u, u_ref, half, box, box_ref, periodic, h_ref, growth):
+def motion_bound(x, x_ref, u, u_ref, half, box, box_ref, periodic, h_ref, growth, dl=None):
     """How far spines can have come closer since the last build: returns ``(sigma,
     shrink)`` such that every pair's spine distance now is at least
     ``sigma g_ref - shrink`` (``g_ref`` its spine distance at the build).
@@ -388,7 +388,12 @@ def motion_bound(x, x_ref, u, u_ref, half, box, box_ref, periodic, h_ref, growth
     reach and half-length grew by ``growth``, and a spine point of particle ``i`` moved by
     at most ``delta_i = |x_i - a x_ref_i| + h_i |u_i - u_ref_i|`` relative to the scaled
     reference; so ``shrink = 2 (eps + |growth - 1|) h_ref + 2 max delta`` (``h_ref`` the
-    largest half-length at the build)."""
+    largest half-length at the build).
+
+    With ``dl`` (n values) also each particle's own share, ``dl_i = (eps + |growth - 1|)
+    h_ref + delta_i``: pair ``(i, j)``'s spine distance is at least ``sigma g_ref - dl_i -
+    dl_j``, a bound as safe and tighter (``shrink = 2 max dl``, taken by the particles
+    that moved most)."""
     n = x.shape[0]
     sigma = 1.0
     eps = 0.0
@@ -404,6 +409,9 @@ def motion_bound(x, x_ref, u, u_ref, half, box, box_ref, periodic, h_ref, growth
     p0, p1, p2 = periodic[0], periodic[1], periodic[2]
     nb = (n + BLOCK - 1) // BLOCK
     dmax = np.zeros(nb)
+    share = (eps + abs(growth - 1.0)) * h_ref
+    dlv = dl if dl is not None else np.empty(0)
+    out = dlv.shape[0] == n
     for b in prange(nb):
         m = 0.0  # rods: translation plus the end's swing
         m2 = 0.0  # spheres: the squared translation (one square root per block)
@@ -424,9 +432,14 @@ def motion_bound(x, x_ref, u, u_ref, half, box, box_ref, periodic, h_ref, growth
                 e0 = u[i, 0] - u_ref[i, 0]
                 e1 = u[i, 1] - u_ref[i, 1]
                 e2 = u[i, 2] - u_ref[i, 2]
-                m = max(m, np.sqrt(dd) + half[i] * hscale * np.sqrt(e0 * e0 + e1 * e1 + e2 * e2))
+                di = np.sqrt(dd) + half[i] * hscale * np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+                m = max(m, di)
+                if out:
+                    dlv[i] = share + di
             else:
                 m2 = max(m2, dd)
+                if out:
+                    dlv[i] = share + np.sqrt(dd)
         dmax[b] = max(m, np.sqrt(m2))
     worst = 0.0
     for b in range(nb):

@@ -22,7 +22,7 @@ import numpy as np
 
 from pysim import integrators as itg
 from pysim.contacts import PAIR_SCRATCH, REC_COLUMNS, pair_forces, worst_overlap
-from pysim.forces import LAW_IDS, NO_TENSION, contact_params
+from pysim.forces import END_BONDS, LAW_IDS, NO_TENSION, contact_params
 from pysim.jit import get_threads
 from pysim.neighbors import row_starts, transpose
 from pysim.state import State
@@ -195,6 +195,7 @@ class Simulation:
         self.x_ref = s.x.copy()
         self.u_ref = s.u.copy() if self.sys[itg.RODS] else np.zeros((0, 3))
         self.box_ref = s.box.copy()
+        self._dl = self._motion_shares()
         self._index_pairs()
         self._rebuild()
         self.compute_forces()
@@ -240,6 +241,13 @@ class Simulation:
 
     def _set_pairs(self, p):
         self.pi, self.pj, self._istart, self._jstart, self._jk, self.hist, self._fj = p
+
+    def _motion_shares(self) -> np.ndarray:
+        """Scratch for each rod's share of the motion bound, written by every list check
+        of a run (:func:`pysim.integrators.maybe_rebuild`), read by the rods' contact
+        pass alone (empty otherwise); infinite, no pair skipped by it, until then."""
+        one_bond = self.sys[itg.RODS] and not self._cp[END_BONDS]
+        return np.full(self.state.n if one_bond else 0, np.inf)
 
     def _index_pairs(self):
         """Derive the row starts, the transposed index and the reaction scratch from
@@ -320,7 +328,8 @@ class Simulation:
                 self.r_int, s.mass, s.inertia, s.box, s.periodic, *self._pairs(), self.x_ref,
                 self.u_ref, self.box_ref, self.model.law_id, self._cp, self.model.friction,
                 self.planes, self.cyls, self._wp, self._wfriction, self.whist,
-                self.wall_force, self.sys, self._clock(), self.dt, left, self.virial)
+                self.wall_force, self.sys, self._clock(), self.dt, left, self.virial,
+                self._dl)
             self._set_pairs(pairs)
             self.rebuilds += nreb
             self._advance_clock(done)

@@ -163,6 +163,84 @@ def test_list_is_stale_never_misses_a_rod_contact(rng):
     assert checked > 100
 
 
+@pytest.mark.parametrize("growth", [1.0, 1.002])
+def test_each_rods_share_of_the_motion_bound_holds_for_every_pair(rng, growth):
+    """Rods (spheres among them) translating, rotating, the box contracting along one
+    axis and growing along another, the particles growing: every listed pair's spine
+    distance stays at least ``sigma g_ref - dl_i - dl_j``, the largest shares make the
+    global shrink, and the shares are much tighter for most pairs."""
+    from pysim.geometry import segment_distance
+    from pysim.neighbors import motion_bound
+
+    def spine_distance(xi, ui, hi, xj, uj, hj, box):
+        d = xj - xi
+        d -= box * np.round(d / box)  # minimum image
+        return segment_distance(xi, ui, hi, xi + d, uj, hj)
+
+    n = 150
+    alpha = rng.uniform(0, 3, n)
+    alpha[:20] = 0.0
+    x, u, r, length, box = random_spherocylinders(np.full(n, 0.5), alpha, 0.25, 6)
+    half0 = length / 2
+    pi, pj, *_ = build_list(x, u, r + half0, half0, box, PER, 0.5)
+    x_ref, u_ref, box_ref = x.copy(), u.copy(), box.copy()
+    g_ref = np.array([spine_distance(x[i], u[i], half0[i], x[j], u[j], half0[j], box)
+                      for i, j in zip(pi, pj)])
+    a = np.array([np.exp(-0.004), np.exp(0.003), 1.0])
+    tighter = 0
+    for step in range(1, 31):
+        box = box_ref * a ** step
+        x = (x_ref * a ** step + rng.normal(0, 0.004 * step, x.shape)) % box
+        u = u_ref + rng.normal(0, 0.003 * step, u.shape)
+        u /= np.linalg.norm(u, axis=1, keepdims=True)
+        g = growth ** step
+        half = half0 * g
+        dl = np.full(n, np.nan)
+        sigma, shrink = motion_bound(x, x_ref, u, u_ref, half, box, box_ref, PER,
+                                     half0.max(), g, dl)
+        # the bound is on the distance with the build's half-lengths scaled by g
+        now = np.array([spine_distance(x[i], u[i], half[i], x[j], u[j], half[j], box)
+                        for i, j in zip(pi, pj)])
+        assert np.all(now >= sigma * g_ref - dl[pi] - dl[pj] - 1e-12)
+        assert 2 * dl.max() == pytest.approx(shrink, rel=1e-12)
+        tighter += np.mean(dl[pi] + dl[pj] < 0.8 * shrink)
+    assert tighter / 30 > 0.5
+
+
+def test_a_rod_brought_into_contact_by_its_own_motion_is_not_skipped():
+    """Two parallel rods 0.1 D apart at the build; the second moves 0.11 D towards the
+    first. The pair's own shares (0 and 0.11) keep it, and the rods' pass gives the
+    contact force that the pass without shares gives (a share counted at half would
+    skip the pair, and the force would be zero)."""
+    from pysim.contacts import PAIR_SCRATCH, SEP, rod_pass
+    from pysim.neighbors import motion_bound, spine_separations
+
+    box = np.full(3, 10.0)
+    x = np.array([[5.0, 5.0, 5.0], [5.0, 6.1, 5.0]])
+    u = np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    r = np.full(2, 0.5)
+    half = np.ones(2)
+    pi, pj, istart, jstart, jk = build_list(x, u, r + half, half, box, PER, 0.4)
+    assert len(pi) == 1
+    fj = np.zeros((PAIR_SCRATCH, 1))
+    spine_separations(x, u, half, box, PER, pi, pj, fj[SEP])
+    x_ref, u_ref = x.copy(), u.copy()
+    x[1, 1] -= 0.11
+    dl = np.empty(2)
+    sigma, shrink = motion_bound(x, x_ref, u, u_ref, half, box, box, PER, 1.0, 1.0, dl)
+    assert dl == pytest.approx([0.0, 0.11]) and shrink == pytest.approx(0.22)
+    p = contact_params(1e4, 5.0)
+    out = []
+    for shares in (None, dl):
+        f, tq, vir = np.empty((2, 3)), np.empty((2, 3)), np.zeros((3, 3))
+        rod_pass(x, np.zeros((2, 3)), np.zeros((2, 3)), u, r, half, box, PER, pi, pj, istart,
+                 jstart, jk, np.zeros((1, 0)), HOOKE, p, False, 1e-4, f, tq, fj.copy(), False,
+                 vir, sigma, shrink, 1, None, shares)
+        out.append(f)
+    assert out[0][0, 1] == pytest.approx(-1e4 * 0.01)
+    np.testing.assert_array_equal(out[0], out[1])
+
+
 def dense_rods_with_friction(alpha_max=3.0):
     """300 rods of ``L/D`` uniform in ``[0, alpha_max]`` (spheres with 0) with friction."""
     rng = np.random.default_rng(5)
@@ -472,13 +550,15 @@ def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, parts
     x = (x * np.exp(-0.02) + rng.normal(0, 0.01, x.shape)) % box
     u = u + rng.normal(0, 0.01, u.shape)
     u /= np.linalg.norm(u, axis=1, keepdims=True)
-    sigma, shrink = motion_bound(x, x_ref, u, u_ref, half, box, box_ref, PER, half.max(), 1.0)
+    dl = np.full(n, np.nan)
+    sigma, shrink = motion_bound(x, x_ref, u, u_ref, half, box, box_ref, PER, half.max(), 1.0,
+                                 dl)
     v = rng.normal(0, 1, (n, 3))
     w = rng.normal(0, 1, (n, 3))
     law_id, p = chunk_test_law(law, friction)
     hist0 = rng.normal(0, 1e-4, (len(pi), 3)) if friction else np.zeros((len(pi), 0))
     out = []
-    for kernel in ("general", "rods"):
+    for kernel in ("general", "rods", "rods, own shares"):
         f, tq, vir = np.ones((n, 3)), np.ones((n, 3)), np.zeros((3, 3))
         fj = scratch.copy()
         fj[:SEP] = np.nan
@@ -494,19 +574,24 @@ def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, parts
             clear_slots(istart, jstart, jk, fj, parts, False)
             pe, nc = rod_pass(x, v, w, u, r, half, box, PER, pi, pj, istart, jstart, jk, h,
                               law_id, p, friction, 1e-4, f, tq, fj, True, vir, sigma, shrink,
-                              parts, worst)
+                              parts, worst, dl if kernel == "rods, own shares" else None)
             assert np.all(np.isnan(fj[:SEP]) | (fj[:SEP] == 0.0))
         # the largest overlap and its pair, as a pass of its own finds them
         assert tuple(worst) == worst_overlap(x, u, r, half, box, PER, pi, pj, True)
         assert worst[0] > 0.01
         out.append((f, tq, h, vir, fj[SEP:], pe, nc))
-    a, b = out
-    assert a[6] == b[6] > 100
-    for k in range(5):
-        assert np.array_equal(a[k], b[k], equal_nan=True), k
-    assert a[5] == b[5]
+    a = out[0]
+    for b in out[1:]:
+        assert a[6] == b[6] > 100
+        for k in range(5):
+            assert np.array_equal(a[k], b[k], equal_nan=True), k
+        assert a[5] == b[5]
     skipped = sigma * scratch[SEP] - shrink > (r[pi] + r[pj] + p[6]) * 1.000000001
     assert skipped.sum() > 10
+    # the rods' own shares rule out many of the pairs that the largest share keeps
+    reach_max = (2 * r.max() + p[6]) * 1.000000001
+    own = sigma * scratch[SEP] - dl[pi] - dl[pj] > reach_max
+    assert np.sum(own & ~(sigma * scratch[SEP] - shrink > reach_max)) > 100
     if radii == "mixed":  # kept by the largest reach, skipped by the pair's own
         kept = ~(sigma * scratch[SEP] - shrink > (2 * r.max() + p[6]) * 1.000000001)
         assert np.sum(kept & skipped) > 10
