@@ -51,8 +51,8 @@ SQRT_HALF = np.sqrt(0.5)
 # indices into the 'sys' scalar array
 (GAMMA_BG, GAMMA_ROT, GX, GY, GZ, EPS_X, EPS_Y, EPS_Z, GROWTH, SKIN, RINT_BUILD, K_D,
  RC_BUILD, HALF_BUILD, RODS, DIM2, SEP_SIGMA, SEP_SHRINK, PARTS, SLOT_PARTS, WORST_OVERLAP,
- WORST_PAIR) = range(22)
-SYS_SIZE = 22
+ WORST_PAIR, OWN_PARTS) = range(23)
+SYS_SIZE = 23
 #: ``sys[WORST_PAIR]`` when the last force evaluation with statistics could not tell the
 #: largest overlap (``end_bonds`` rods): :func:`pysim.contacts.worst_overlap` must
 WORST_UNKNOWN = -2.0
@@ -72,7 +72,9 @@ WORST_UNKNOWN = -2.0
 #: list build). ``sys[WORST_OVERLAP]``, ``sys[WORST_PAIR]``: the largest overlap as a
 #: fraction of the smaller diameter and its pair (``-inf``, -1: none) at the last
 #: :func:`forces` with ``stats`` (:func:`pysim.contacts.block_worst`), for the blow-up
-#: check, or ``WORST_UNKNOWN``.
+#: check, or ``WORST_UNKNOWN``. ``sys[OWN_PARTS]``: the parts for which the ``own`` flags
+#: that :func:`forces` keeps (:func:`pysim.contacts.own_flags`) are this list's (0 after a
+#: list build, and whenever the flags array is new).
 PAIR_ARRAYS = ("pi", "pj", "istart", "jstart", "jk", "hist", "fj")
 
 
@@ -145,6 +147,7 @@ def rebuild(x, u, box, periodic, r_int, half, sys, old_istart, old_pj, old_hist,
     sys[SEP_SIGMA] = 1.0
     sys[SEP_SHRINK] = 0.0
     sys[SLOT_PARTS] = 0.0
+    sys[OWN_PARTS] = 0.0
     return pi, pj, istart, jstart, jk, hist, fj
 
 
@@ -184,14 +187,16 @@ def _body(f, torque, v, omega, mass, gx, gy, gz, gb, gr):
 @njit
 def forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, jstart, jk, hist,
            fj, law, cp, friction, planes, cyls, wp, wfriction, whist, wall_force, sys, t, dt,
-           f, torque, virial, stats, dl=None):
+           f, torque, virial, stats, dl=None, own=None):
     """Overwrite ``f``, ``torque`` with pair contacts, walls, gravity ``m g``, drag
     ``-gamma_bg v`` and ``-gamma_rot omega`` (added in that order). With ``stats`` also
     the virial and the largest overlap (``sys[WORST_OVERLAP]``, ``sys[WORST_PAIR]``), and
     returns ``(elastic energy, pair contacts, wall contacts)``; without, the virial and
     the overlap are left as they were and the first two are zero. ``dl``: the particles'
     shares of the motion bound that :func:`maybe_rebuild` wrote with ``sys[SEP_SIGMA]``
-    (rods skip the pairs it keeps out of reach; the same forces)."""
+    (rods skip the pairs it keeps out of reach; the same forces). ``own``: n flags kept
+    from call to call, the shared particles of the parts (``sys[OWN_PARTS]``), else they
+    are found at every call."""
     # the sphere and rod passes write complete pair forces on any number of threads (one
     # part of the rows per thread); the general pass does on one thread only (scatter),
     # else reduce_pass adds the stored reactions. The same bits either way.
@@ -201,6 +206,10 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, js
     if not ends and parts > 1 and sys[SLOT_PARTS] != parts:
         clear_slots(istart, jstart, jk, fj, parts, sys[RODS] == 0.0)
         sys[SLOT_PARTS] = parts
+    ownv = own if own is not None else np.empty(0, np.bool_)
+    own_ok = sys[OWN_PARTS] == parts
+    if ownv.shape[0] == x.shape[0] and not ends:
+        sys[OWN_PARTS] = parts  # the pass writes them now if they were not
     worst = sys[WORST_OVERLAP:WORST_PAIR + 1]  # a view: the passes write the overlap there
     if ends:
         scatter = parts == 1
@@ -213,11 +222,11 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, js
     elif sys[RODS] != 0.0:
         pe, nc = rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart,
                           jk, hist, law, cp, friction, dt, f, torque, fj, stats, virial,
-                          sys[SEP_SIGMA], sys[SEP_SHRINK], parts, worst, dl)
+                          sys[SEP_SIGMA], sys[SEP_SHRINK], parts, worst, dl, ownv, own_ok)
     else:
         pe, nc = sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk,
                              hist, law, cp, friction, dt, f, torque, fj, stats, virial, parts,
-                             worst)
+                             worst, ownv, own_ok)
     gx, gy, gz = sys[GX], sys[GY], sys[GZ]
     gb = sys[GAMMA_BG]
     gr = sys[GAMMA_ROT]
@@ -464,7 +473,7 @@ RETURN_PAIRS = 1 << 13
 def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia, box,
                  periodic, pi, pj, istart, jstart, jk, hist, fj, x_ref, u_ref, box_ref, law, cp,
                  friction, planes, cyls, wp, wfriction, whist, wall_force, sys, clock, dt, nsteps,
-                 virial, dl):
+                 virial, dl, own):
     """Advance ``nsteps`` velocity-Verlet steps (see the module doc).
 
     ``clock = (t_seg, s_seg, step0)``: the time after step ``k`` of this call is
@@ -476,7 +485,8 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
     the caller drops the old list before the next rebuild (a call that rebuilt twice
     would hold three lists at once). ``dl``: scratch of n values for the particles' shares
     of the motion bound (:func:`maybe_rebuild`), or none (empty): the rods' contact pass
-    then skips by the largest share alone. Returns ``(pair arrays (7), elastic energy,
+    then skips by the largest share alone. ``own``: n flags kept for :func:`forces` (or
+    none). Returns ``(pair arrays (7), elastic energy,
     pair contacts, wall contacts, rebuilds, steps done)``.
     """
     h = 0.5 * dt
@@ -514,7 +524,7 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
             rebuilds += 1
         pe, nc, nw = forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart,
                             jstart, jk, hist, fj, law, cp, friction, planes, cyls, wp, wfriction,
-                            whist, wall_force, sys, t, dt, f, torque, virial, last, dl)
+                            whist, wall_force, sys, t, dt, f, torque, virial, last, dl, own)
         for kk in range(3):
             box[kk] *= scale[kk]
         if last:

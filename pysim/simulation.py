@@ -196,6 +196,7 @@ class Simulation:
         self.u_ref = s.u.copy() if self.sys[itg.RODS] else np.zeros((0, 3))
         self.box_ref = s.box.copy()
         self._dl = self._motion_shares()
+        self._own = np.zeros(s.n, np.bool_)  # the threads' shared particles (forces)
         self._index_pairs()
         self._rebuild()
         self.compute_forces()
@@ -329,7 +330,7 @@ class Simulation:
                 self.u_ref, self.box_ref, self.model.law_id, self._cp, self.model.friction,
                 self.planes, self.cyls, self._wp, self._wfriction, self.whist,
                 self.wall_force, self.sys, self._clock(), self.dt, left, self.virial,
-                self._dl)
+                self._dl, self._own)
             self._set_pairs(pairs)
             self.rebuilds += nreb
             self._advance_clock(done)

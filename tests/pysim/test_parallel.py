@@ -279,6 +279,53 @@ def test_one_and_two_threads_give_identical_bits(alpha_max):
     assert a._pe == b._pe
 
 
+@pytest.mark.parametrize("alpha_max", [3.0, 0.0])
+def test_kept_shared_flags_are_found_again_for_a_new_list_or_new_parts(alpha_max):
+    """``forces`` keeps the flags of the threads' shared particles from call to call:
+    after a list build (the particles in another order) and after a change of the
+    number of parts it finds them again, and the forces are those found with new flags
+    at every call. Kept flags of the old list would let an earlier part add reactions
+    to particles that a later part zeroes, and lose them."""
+    import pysim.integrators as itg
+
+    sim = dense_rods_with_friction(alpha_max)
+    sim.run(1500, strain_rate=-3.0)  # into contact
+    assert sim.thermo().n_contacts > 50
+    s = sim.state
+    own = np.zeros(s.n, np.bool_)
+
+    def forces(own_flags):
+        f, tq = np.empty_like(sim.f), np.empty_like(sim.torque)
+        itg.forces(s.x, s.v, s.omega, s.u, s.radius, sim.half, s.mass, s.box, s.periodic,
+                   *sim._pairs(), sim.model.law_id, sim._cp, sim.model.friction, sim.planes,
+                   sim.cyls, sim._wp, sim._wfriction, sim.whist.copy(), sim.wall_force,
+                   sim.sys, 0.0, sim.dt, f, tq, np.zeros((3, 3)), False, None, own_flags)
+        return f, tq
+
+    hist = sim.hist.copy()
+    for parts, reorder in ((3, False), (3, True), (2, False), (3, False)):
+        if reorder:  # the same particles in reverse order: another list, other flags
+            for k in ("x", "v", "omega", "u", "q", "radius", "length", "mass", "inertia"):
+                setattr(s, k, np.ascontiguousarray(getattr(s, k)[::-1]))
+            sim.half = np.ascontiguousarray(sim.half[::-1])
+            sim.r_int = np.ascontiguousarray(sim.r_int[::-1])
+            sim.pi, sim.pj = np.zeros(0, np.int32), np.zeros(0, np.int32)
+            sim.hist = np.zeros((0, 3))
+            sim._index_pairs()
+            sim._rebuild()
+            hist = sim.hist.copy()
+        sim.sys[itg.PARTS] = parts
+        for kept in (False, True, True):
+            sim.hist[:] = hist
+            got = forces(own)
+            assert sim.sys[itg.OWN_PARTS] == parts
+            sim.hist[:] = hist
+            want = forces(None)
+            for a, b in zip(got, want):
+                np.testing.assert_array_equal(a, b)
+            assert np.isfinite(got[0]).all() and np.abs(got[0]).max() > 0
+
+
 @pytest.mark.parametrize("dimension", [3, 2])
 def test_steps_in_one_call_equal_steps_one_by_one(dimension):
     """Inside a call, each step's second half-kick (with the box remap and the growth)
