@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pysim.integrators import DIM2, OWN_PARTS, RODS, SYS_SIZE
+from pysim.integrators import DIM2, RODS, SYS_SIZE
 from pysim.simulation import ContactModel, Simulation
 from pysim.state import State
 
@@ -98,7 +98,5 @@ def load(path) -> tuple[Simulation, dict]:
         sim.u_ref = state.u.copy() if sys[RODS] else np.zeros((0, 3))
         sim._rebuild()
         sim.rebuilds -= 1
-    sim._dl = sim._motion_shares()
-    sim._own = np.zeros(state.n, np.bool_)
-    sim.sys[OWN_PARTS] = 0.0  # new flags: found at the first step
+    sim._new_scratch()
     return sim, meta["extra"]

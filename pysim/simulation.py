@@ -195,8 +195,7 @@ class Simulation:
         self.x_ref = s.x.copy()
         self.u_ref = s.u.copy() if self.sys[itg.RODS] else np.zeros((0, 3))
         self.box_ref = s.box.copy()
-        self._dl = self._motion_shares()
-        self._own = np.zeros(s.n, np.bool_)  # the threads' shared particles (forces)
+        self._new_scratch()
         self._index_pairs()
         self._rebuild()
         self.compute_forces()
@@ -243,12 +242,18 @@ class Simulation:
     def _set_pairs(self, p):
         self.pi, self.pj, self._istart, self._jstart, self._jk, self.hist, self._fj = p
 
-    def _motion_shares(self) -> np.ndarray:
-        """Scratch for each rod's share of the motion bound, written by every list check
-        of a run (:func:`pysim.integrators.maybe_rebuild`), read by the rods' contact
-        pass alone (empty otherwise); infinite, no pair skipped by it, until then."""
+    def _new_scratch(self):
+        """The per-particle scratch the steps keep (new at construction and after a
+        checkpoint load): ``_dl``, each rod's share of the motion bound, written by every
+        list check of a run (:func:`pysim.integrators.maybe_rebuild`) and read by the
+        rods' contact pass alone (empty otherwise; infinite, no pair skipped by it, until
+        then); ``_own``, the threads' shared-particle flags that
+        :func:`pysim.integrators.forces` keeps, found again at the first step
+        (``sys[OWN_PARTS] = 0``)."""
         one_bond = self.sys[itg.RODS] and not self._cp[END_BONDS]
-        return np.full(self.state.n if one_bond else 0, np.inf)
+        self._dl = np.full(self.state.n if one_bond else 0, np.inf)
+        self._own = np.zeros(self.state.n, np.bool_)
+        self.sys[itg.OWN_PARTS] = 0.0
 
     def _index_pairs(self):
         """Derive the row starts, the transposed index and the reaction scratch from
