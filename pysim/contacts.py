@@ -848,9 +848,8 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, 
     its rows as it starts: no other part adds to them. Either way ``f_i = row sum +
     reaction sum`` in pair order, so any number of parts gives the same bits; with
     spatially sorted particles few are shared, and the threads touch no more memory than
-    one thread does. With more
-    than one part the records of the shared particles' pairs in ``fj`` must hold zero on
-    entry (:func:`clear_slots`); they are left at zero. Two parts on one thread, 10^4
+    one thread does. With more than one part the records of the shared particles' pairs
+    in ``fj`` must hold zero on entry (:func:`clear_slots`); they are left at zero. Two parts on one thread, 10^4
     spheres with friction: 1.51 ms per pass with the part's end and a flag tested per
     pair, the reactions stored six rows apart at a slot searched in the transposed list;
     1.15 ms now (one part: 1.05 ms).

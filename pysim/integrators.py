@@ -486,8 +486,8 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
     would hold three lists at once). ``dl``: scratch of n values for the particles' shares
     of the motion bound (:func:`maybe_rebuild`), or none (empty): the rods' contact pass
     then skips by the largest share alone. ``own``: n flags kept for :func:`forces` (or
-    none). Returns ``(pair arrays (7), elastic energy,
-    pair contacts, wall contacts, rebuilds, steps done)``.
+    none). Returns ``(pair arrays (7), elastic energy, pair contacts, wall contacts,
+    rebuilds, steps done)``.
     """
     h = 0.5 * dt
     pe = 0.0
