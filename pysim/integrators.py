@@ -37,8 +37,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pysim.contacts import (PAIR_SCRATCH, SEP, clear_slots, pair_pass, reduce_pass, rod_pass,
-                            sphere_pass)
+from pysim.contacts import (BLOCK, PAIR_SCRATCH, SEP, clear_slots, pair_pass, reduce_pass,
+                            rod_pass, sphere_pass)
 from pysim.forces import END_BONDS
 from pysim.jit import njit, pnjit, prange
 from pysim.neighbors import (ROW_ROOM, build_list, motion_bound, spine_separations,
@@ -536,10 +536,10 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
     return pi, pj, istart, jstart, jk, hist, fj, pe, nc, nw, rebuilds, done
 
 
-@njit
+@pnjit
 def _mobility_step(x0, q0, f, torque, mass, inertia, msize, kd, u, x, q, v, omega, dt, scale):
     """``x = scale (x0 + dt F/(k_d a))``, ``q = q0`` rotated by ``dt tau/(k_d a I/m)``."""
-    for i in range(x.shape[0]):
+    for i in prange(x.shape[0]):
         mt = 1.0 / (kd * msize[i])
         for k in range(3):
             v[i, k] = mt * f[i, k]
@@ -548,7 +548,8 @@ def _mobility_step(x0, q0, f, torque, mass, inertia, msize, kd, u, x, q, v, omeg
         omega[i, 0] = mr * torque[i, 0]
         omega[i, 1] = mr * torque[i, 1]
         omega[i, 2] = mr * torque[i, 2]
-        q[i, :] = q0[i, :]
+        for k in range(4):
+            q[i, k] = q0[i, k]
         wn = np.sqrt(omega[i, 0] ** 2 + omega[i, 1] ** 2 + omega[i, 2] ** 2)
         if wn > 0.0:
             # rotation by angle |omega| dt about omega (lab frame): free_rotate with
@@ -556,6 +557,47 @@ def _mobility_step(x0, q0, f, torque, mass, inertia, msize, kd, u, x, q, v, omeg
             ip = inertia[i, 0]
             free_rotate(q, i, ip * omega[i, 0], ip * omega[i, 1], ip * omega[i, 2],
                         u[i, 0], u[i, 1], u[i, 2], ip, ip, dt)
+
+
+@pnjit
+def _keep_rows(x, q, f, torque, x0, q0, f0, t0):
+    """Copy positions, quaternions, forces and torques (the predictor's start)."""
+    for i in prange(x.shape[0]):
+        for k in range(3):
+            x0[i, k] = x[i, k]
+            f0[i, k] = f[i, k]
+            t0[i, k] = torque[i, k]
+        for k in range(4):
+            q0[i, k] = q[i, k]
+
+
+@pnjit
+def _axes(q, u):
+    """Every spine direction from its quaternion (:func:`pysim.rotation.axis_of`)."""
+    for i in prange(q.shape[0]):
+        axis_of(q, i, u)
+
+
+@pnjit
+def _heun_correct(x, x0, f0, f, t0, torque, v, omega, q, q0, u, mass, inertia, msize, kd, scale,
+                  dt):
+    """Heun's corrector: ``x = scale x0 + dt/2 (scale F0 + F1)/(k_d a)``, the mean
+    mobility velocities, and ``q = q0`` rotated by ``dt`` times the mean spin."""
+    for i in prange(x.shape[0]):
+        mt = 0.5 * dt / (kd * msize[i])
+        for k in range(3):
+            x[i, k] = scale[k] * x0[i, k] + mt * (scale[k] * f0[i, k] + f[i, k])
+            v[i, k] = 0.5 * (f0[i, k] + f[i, k]) / (kd * msize[i])
+        mr = mass[i] / (kd * msize[i] * inertia[i, 0])
+        omega[i, 0] = 0.5 * mr * (t0[i, 0] + torque[i, 0])
+        omega[i, 1] = 0.5 * mr * (t0[i, 1] + torque[i, 1])
+        omega[i, 2] = 0.5 * mr * (t0[i, 2] + torque[i, 2])
+        for k in range(4):
+            q[i, k] = q0[i, k]
+        ip = inertia[i, 0]
+        free_rotate(q, i, ip * omega[i, 0], ip * omega[i, 1], ip * omega[i, 2],
+                    u[i, 0], u[i, 1], u[i, 2], ip, ip, dt)
+        axis_of(q, i, u)
 
 
 @njit
@@ -582,16 +624,12 @@ def heun_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
     rebuilds = 0
     for kk in range(nsteps):
         t = clock[0] + (clock[2] + kk - clock[1]) * dt
-        x0[:, :] = x
-        q0[:, :] = q
-        f0[:, :] = f
-        t0_[:, :] = torque
+        _keep_rows(x, q, f, torque, x0, q0, f0, t0_)
         # predictor
         _mobility_step(x0, q0, f0, t0_, mass, inertia, msize, kd, u, x, q, v, omega, dt, scale)
         for k in range(3):
             box[k] *= scale[k]
-        for i in range(n):
-            axis_of(q, i, u)
+        _axes(q, u)
         wrap(x, box, periodic)
         pi, pj, istart, jstart, jk, hist, fj, rebuilt = maybe_rebuild(
             x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,
@@ -601,21 +639,8 @@ def heun_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
         forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, jstart, jk, hist,
                fj, law, cp, False, planes, cyls, wp, False, whist, wall_force, sys, t + dt, dt, f,
                torque, virial, False)
-        # corrector: x = scale x0 + dt/2 (scale F0 + F1)/(k_d a)
-        for i in range(n):
-            mt = 0.5 * dt / (kd * msize[i])
-            for k in range(3):
-                x[i, k] = scale[k] * x0[i, k] + mt * (scale[k] * f0[i, k] + f[i, k])
-                v[i, k] = 0.5 * (f0[i, k] + f[i, k]) / (kd * msize[i])
-            mr = mass[i] / (kd * msize[i] * inertia[i, 0])
-            omega[i, 0] = 0.5 * mr * (t0_[i, 0] + torque[i, 0])
-            omega[i, 1] = 0.5 * mr * (t0_[i, 1] + torque[i, 1])
-            omega[i, 2] = 0.5 * mr * (t0_[i, 2] + torque[i, 2])
-            q[i, :] = q0[i, :]
-            ip = inertia[i, 0]
-            free_rotate(q, i, ip * omega[i, 0], ip * omega[i, 1], ip * omega[i, 2],
-                        u[i, 0], u[i, 1], u[i, 2], ip, ip, dt)
-            axis_of(q, i, u)
+        _heun_correct(x, x0, f0, f, t0_, torque, v, omega, q, q0, u, mass, inertia, msize, kd,
+                      scale, dt)
         wrap(x, box, periodic)
         t = clock[0] + (clock[2] + kk + 1 - clock[1]) * dt
         pi, pj, istart, jstart, jk, hist, fj, rebuilt = maybe_rebuild(
@@ -627,6 +652,107 @@ def heun_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
                            jstart, jk, hist, fj, law, cp, False, planes, cyls, wp, False, whist,
                            wall_force, sys, t, dt, f, torque, virial, kk == nsteps - 1)
     return pi, pj, istart, jstart, jk, hist, fj, pe, nc, rebuilds
+
+
+#: per-block sums of :func:`_fire_sums`
+_FIRE_SUMS = 7
+
+
+@pnjit
+def _fire_sums(f, torque, v, omega, part):
+    """FIRE's sums over the particles: ``max |F|^2``, ``max |tau|^2``, ``sum |F|^2``,
+    ``sum |tau|^2``, ``sum |v|^2``, ``sum |omega|^2`` and the power ``sum F.v +
+    tau.omega``, taken per block of :data:`pysim.contacts.BLOCK` rows (``part``, one
+    row per block) and the blocks added in order: the same for any number of threads."""
+    n = f.shape[0]
+    for b in prange(part.shape[0]):
+        fm = 0.0
+        tm = 0.0
+        fs = 0.0
+        ts = 0.0
+        vs = 0.0
+        ws = 0.0
+        pw = 0.0
+        for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
+            a = f[i, 0] ** 2 + f[i, 1] ** 2 + f[i, 2] ** 2
+            c = torque[i, 0] ** 2 + torque[i, 1] ** 2 + torque[i, 2] ** 2
+            fm = max(fm, a)
+            tm = max(tm, c)
+            fs += a
+            ts += c
+            vs += v[i, 0] ** 2 + v[i, 1] ** 2 + v[i, 2] ** 2
+            ws += omega[i, 0] ** 2 + omega[i, 1] ** 2 + omega[i, 2] ** 2
+            pw += (f[i, 0] * v[i, 0] + f[i, 1] * v[i, 1] + f[i, 2] * v[i, 2]
+                   + torque[i, 0] * omega[i, 0] + torque[i, 1] * omega[i, 1]
+                   + torque[i, 2] * omega[i, 2])
+        part[b, 0] = fm
+        part[b, 1] = tm
+        part[b, 2] = fs
+        part[b, 3] = ts
+        part[b, 4] = vs
+        part[b, 5] = ws
+        part[b, 6] = pw
+    fm = 0.0
+    tm = 0.0
+    fs = 0.0
+    ts = 0.0
+    vs = 0.0
+    ws = 0.0
+    pw = 0.0
+    for b in range(part.shape[0]):
+        fm = max(fm, part[b, 0])
+        tm = max(tm, part[b, 1])
+        fs += part[b, 2]
+        ts += part[b, 3]
+        vs += part[b, 4]
+        ws += part[b, 5]
+        pw += part[b, 6]
+    return fm, tm, fs, ts, vs, ws, pw
+
+
+@pnjit
+def _speed_sums(v, omega, part):
+    """``sum |v|^2`` and ``sum |omega|^2`` per block, as :func:`_fire_sums`."""
+    n = v.shape[0]
+    for b in prange(part.shape[0]):
+        vs = 0.0
+        ws = 0.0
+        for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
+            vs += v[i, 0] ** 2 + v[i, 1] ** 2 + v[i, 2] ** 2
+            ws += omega[i, 0] ** 2 + omega[i, 1] ** 2 + omega[i, 2] ** 2
+        part[b, 4] = vs
+        part[b, 5] = ws
+    vs = 0.0
+    ws = 0.0
+    for b in range(part.shape[0]):
+        vs += part[b, 4]
+        ws += part[b, 5]
+    return vs, ws
+
+
+@pnjit
+def _fire_stop(x, v, omega, dt):
+    """FIRE's stop on uphill motion: step back half a step, zero the velocities."""
+    for i in prange(x.shape[0]):
+        for k in range(3):
+            x[i, k] -= 0.5 * dt * v[i, k]
+            v[i, k] = 0.0
+            omega[i, k] = 0.0
+
+
+@pnjit
+def _fire_mix(x, v, omega, f, torque, alpha, vn, wn, fnorm, tnorm, dt):
+    """FIRE's mixing ``v = (1 - alpha) v + alpha |v| F/|F|`` (and the spins with the
+    torques), then the drift ``x += dt v``."""
+    for i in prange(x.shape[0]):
+        for k in range(3):
+            if fnorm > 0.0:
+                v[i, k] = (1.0 - alpha) * v[i, k] + alpha * vn * f[i, k] / fnorm
+            if tnorm > 0.0:
+                omega[i, k] = (1.0 - alpha) * omega[i, k] + alpha * wn * torque[i, k] / tnorm
+        x[i, 0] += dt * v[i, 0]
+        x[i, 1] += dt * v[i, 1]
+        x[i, 2] += dt * v[i, 2]
 
 
 @njit
@@ -641,6 +767,7 @@ def fire_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
     n = x.shape[0]
     f_inc, f_dec, alpha0, f_alpha, n_delay = 1.1, 0.5, 0.1, 0.99, 5
     whist = np.zeros((0, 3))
+    part = np.zeros(((n + BLOCK - 1) // BLOCK, _FIRE_SUMS))
     pe = 0.0
     nc = 0
     fmax = 0.0
@@ -649,25 +776,7 @@ def fire_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
     for it in range(nsteps):
         dt = fire[0]
         # convergence and power
-        fmax = 0.0
-        tmax = 0.0
-        power = 0.0
-        vn2 = 0.0
-        fn2 = 0.0
-        wn2 = 0.0
-        tn2 = 0.0
-        for i in range(n):
-            a = f[i, 0] ** 2 + f[i, 1] ** 2 + f[i, 2] ** 2
-            b = torque[i, 0] ** 2 + torque[i, 1] ** 2 + torque[i, 2] ** 2
-            fmax = max(fmax, a)
-            tmax = max(tmax, b)
-            fn2 += a
-            tn2 += b
-            vn2 += v[i, 0] ** 2 + v[i, 1] ** 2 + v[i, 2] ** 2
-            wn2 += omega[i, 0] ** 2 + omega[i, 1] ** 2 + omega[i, 2] ** 2
-            power += (f[i, 0] * v[i, 0] + f[i, 1] * v[i, 1] + f[i, 2] * v[i, 2]
-                      + torque[i, 0] * omega[i, 0] + torque[i, 1] * omega[i, 1]
-                      + torque[i, 2] * omega[i, 2])
+        fmax, tmax, fn2, tn2, _, _, power = _fire_sums(f, torque, v, omega, part)
         fmax = np.sqrt(fmax)
         tmax = np.sqrt(tmax)
         if fmax < f_tol and tmax < f_tol:
@@ -681,35 +790,14 @@ def fire_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
             fire[2] = 0
             fire[0] = max(dt * f_dec, fire[4])
             fire[1] = alpha0
-            for i in range(n):
-                for k in range(3):
-                    x[i, k] -= 0.5 * dt * v[i, k]
-                    v[i, k] = 0.0
-                    omega[i, k] = 0.0
-            vn2 = 0.0
-            wn2 = 0.0
+            _fire_stop(x, v, omega, dt)
         dt = fire[0]
         alpha = fire[1]
         # semi-implicit Euler: v += dt F/m, then mix, then move
         _kick(v, omega, u, f, torque, mass, inertia, dt)
-        vn = 0.0
-        wn = 0.0
-        for i in range(n):
-            vn += v[i, 0] ** 2 + v[i, 1] ** 2 + v[i, 2] ** 2
-            wn += omega[i, 0] ** 2 + omega[i, 1] ** 2 + omega[i, 2] ** 2
-        vn = np.sqrt(vn)
-        wn = np.sqrt(wn)
-        fnorm = np.sqrt(fn2)
-        tnorm = np.sqrt(tn2)
-        for i in range(n):
-            for k in range(3):
-                if fnorm > 0.0:
-                    v[i, k] = (1.0 - alpha) * v[i, k] + alpha * vn * f[i, k] / fnorm
-                if tnorm > 0.0:
-                    omega[i, k] = (1.0 - alpha) * omega[i, k] + alpha * wn * torque[i, k] / tnorm
-            x[i, 0] += dt * v[i, 0]
-            x[i, 1] += dt * v[i, 1]
-            x[i, 2] += dt * v[i, 2]
+        vn, wn = _speed_sums(v, omega, part)
+        _fire_mix(x, v, omega, f, torque, alpha, np.sqrt(vn), np.sqrt(wn), np.sqrt(fn2),
+                  np.sqrt(tn2), dt)
         _rotate_free(q, u, omega, inertia, half, dt)
         wrap(x, box, periodic)
         pi, pj, istart, jstart, jk, hist, fj, _ = maybe_rebuild(

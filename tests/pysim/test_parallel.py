@@ -642,3 +642,57 @@ def test_rod_pass_is_the_same_bits_as_the_general_pass(rng, friction, law, parts
     if radii == "mixed":  # kept by the largest reach, skipped by the pair's own
         kept = ~(sigma * scratch[SEP] - shrink > (2 * r.max() + p[6]) * 1.000000001)
         assert np.sum(kept & skipped) > 10
+
+
+def compressed_2d_rods(n=400, seed=4):
+    """2-D bidisperse rods (``L/D`` up to 1) from RSA at 0.45, overdamped to 0.9."""
+    rng = np.random.default_rng(seed)
+    d = np.where(rng.random(n) < 0.5, 1.0, 1.4)
+    x, u, r, length, box = random_spherocylinders(d / 2, rng.uniform(0, 1, n) * d, 0.45, seed,
+                                                  dimension=2)
+    st = State.create(x, r, length, box, axis=u, dimension=2, periodic=(True, True, False))
+    sim = Simulation(st, ContactModel("harmonic", 1.0), dt=0.01, check_dt=False)
+    sim.run_overdamped(int(np.log(0.9 / 0.45) / (2 * 2e-3 * 0.01)), k_d=1.0, kappa=2e-3)
+    return sim
+
+
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 Numba threads")
+def test_overdamped_and_fire_give_identical_bits_on_one_and_two_threads():
+    """Heun's and FIRE's per-particle loops run on threads, and FIRE's sums are taken per
+    block in block order: an overdamped compression and a FIRE relaxation end in the same
+    bits on one thread and on two."""
+    before = get_threads()
+    out = []
+    try:
+        for threads in (1, 2):
+            set_threads(threads)
+            sim = compressed_2d_rods()
+            it, fmax, tmax = sim.minimize(f_tol=1e-30, max_iter=400)
+            out.append((sim, it, fmax, tmax))
+    finally:
+        set_threads(before)
+    (a, it_a, fa, ta), (b, it_b, fb, tb) = out
+    assert a.thermo().n_contacts > 100 and it_a == 400
+    assert (it_a, fa, ta) == (it_b, fb, tb)
+    for k in ("x", "v", "q", "u", "omega"):
+        np.testing.assert_array_equal(getattr(a.state, k), getattr(b.state, k), err_msg=k)
+    np.testing.assert_array_equal(a.f, b.f)
+    assert a._pe == b._pe
+
+
+def test_fire_sums_against_numpy(rng):
+    """FIRE's block sums (:func:`pysim.integrators._fire_sums`, ``_speed_sums``): the
+    largest squared force and torque exactly, the sums to rounding, on a length that
+    does not fill its last block."""
+    from pysim.contacts import BLOCK
+    from pysim.integrators import _FIRE_SUMS, _fire_sums, _speed_sums
+    n = 5 * BLOCK + 17
+    f, tq, v, w = (rng.normal(size=(n, 3)) for _ in range(4))
+    part = np.full(((n + BLOCK - 1) // BLOCK, _FIRE_SUMS), np.nan)
+    fm, tm, fs, ts, vs, ws, pw = _fire_sums(f, tq, v, w, part)
+    f2 = (f ** 2).sum(1)
+    t2 = (tq ** 2).sum(1)
+    assert fm == f2.max() and tm == t2.max()
+    expect = (f2.sum(), t2.sum(), (v ** 2).sum(), (w ** 2).sum(), (f * v).sum() + (tq * w).sum())
+    np.testing.assert_allclose((fs, ts, vs, ws, pw), expect, rtol=1e-12)
+    assert _speed_sums(v, w, part) == (vs, ws)
