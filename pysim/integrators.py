@@ -692,22 +692,19 @@ def _fire_sums(f, torque, v, omega, part):
         part[b, 4] = vs
         part[b, 5] = ws
         part[b, 6] = pw
-    fm = 0.0
-    tm = 0.0
-    fs = 0.0
-    ts = 0.0
-    vs = 0.0
-    ws = 0.0
-    pw = 0.0
+    tot = _fold_blocks(part)
+    return tot[0], tot[1], tot[2], tot[3], tot[4], tot[5], tot[6]
+
+
+@njit
+def _fold_blocks(part):
+    """The totals of :func:`_fire_sums`' block rows, in block order: the largest value
+    of the first two columns, the sum of the others."""
+    tot = np.zeros(part.shape[1])
     for b in range(part.shape[0]):
-        fm = max(fm, part[b, 0])
-        tm = max(tm, part[b, 1])
-        fs += part[b, 2]
-        ts += part[b, 3]
-        vs += part[b, 4]
-        ws += part[b, 5]
-        pw += part[b, 6]
-    return fm, tm, fs, ts, vs, ws, pw
+        for c in range(part.shape[1]):
+            tot[c] = max(tot[c], part[b, c]) if c < 2 else tot[c] + part[b, c]
+    return tot
 
 
 @pnjit
@@ -722,12 +719,8 @@ def _speed_sums(v, omega, part):
             ws += omega[i, 0] ** 2 + omega[i, 1] ** 2 + omega[i, 2] ** 2
         part[b, 4] = vs
         part[b, 5] = ws
-    vs = 0.0
-    ws = 0.0
-    for b in range(part.shape[0]):
-        vs += part[b, 4]
-        ws += part[b, 5]
-    return vs, ws
+    tot = _fold_blocks(part)
+    return tot[4], tot[5]
 
 
 @pnjit
