@@ -43,7 +43,7 @@ from pysim.forces import END_BONDS
 from pysim.jit import njit, pnjit, prange
 from pysim.neighbors import (ROW_ROOM, build_list, motion_bound, spine_separations,
                              stale_by_bound, transfer_rows)
-from pysim.rotation import axis_from, axis_of, free_rotate, rotate_top
+from pysim.rotation import axes, axis_from, axis_of, free_rotate, rotate_top
 from pysim.walls import wall_forces
 
 SQRT_HALF = np.sqrt(0.5)
@@ -572,13 +572,6 @@ def _keep_rows(x, q, f, torque, x0, q0, f0, t0):
 
 
 @pnjit
-def _axes(q, u):
-    """Every spine direction from its quaternion (:func:`pysim.rotation.axis_of`)."""
-    for i in prange(q.shape[0]):
-        axis_of(q, i, u)
-
-
-@pnjit
 def _heun_correct(x, x0, f0, f, t0, torque, v, omega, q, q0, u, mass, inertia, msize, kd, scale,
                   dt):
     """Heun's corrector: ``x = scale x0 + dt/2 (scale F0 + F1)/(k_d a)``, the mean
@@ -629,7 +622,7 @@ def heun_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
         _mobility_step(x0, q0, f0, t0_, mass, inertia, msize, kd, u, x, q, v, omega, dt, scale)
         for k in range(3):
             box[k] *= scale[k]
-        _axes(q, u)
+        axes(q, u)
         wrap(x, box, periodic)
         pi, pj, istart, jstart, jk, hist, fj, rebuilt = maybe_rebuild(
             x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,

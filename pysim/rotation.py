@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pysim.jit import njit
+from pysim.jit import njit, pnjit, prange
 
 
 @njit
@@ -38,10 +38,10 @@ def axis_of(q, i, u):
     u[i, 0], u[i, 1], u[i, 2] = axis_from(q[i, 0], q[i, 1], q[i, 2], q[i, 3])
 
 
-@njit
+@pnjit
 def axes(q, u):
-    """All spine directions from all quaternions (in place)."""
-    for i in range(q.shape[0]):
+    """All spine directions from all quaternions (in place; on threads)."""
+    for i in prange(q.shape[0]):
         axis_of(q, i, u)
 
 
