@@ -257,30 +257,48 @@ def _planar_forces(f, torque):
         torque[i, 1] = 0.0
 
 
+@pnjit
+def inverses(mass, inertia, inv):
+    """``inv[i] = (1/m_i, 1/I_perp,i, 1/I_axis,i)``, the reciprocals the kicks multiply
+    by, so that the per-particle loops divide only when the particles grow (kept in
+    step there). Dividing, the two kicks of a step took 12 scalar divisions per
+    particle: the bench's 10^4 spheres with friction, one thread, 145 ns per
+    sphere-step with them, 138 with the reciprocals. Taken from ``mass`` and
+    ``inertia`` at the start of every call of the integrators, never kept between
+    calls, so that a change to either is never missed."""
+    for i in prange(mass.shape[0]):
+        inv[i, 0] = 1.0 / mass[i]
+        inv[i, 1] = 1.0 / inertia[i, 0]
+        inv[i, 2] = 1.0 / inertia[i, 1]
+
+
 @njit
-def kick(v0, v1, v2, w0, w1, w2, f0, f1, f2, t0, t1, t2, u0, u1, u2, m, ip, ia, h):
-    """``v += h F/m``, ``omega += h I^-1 tau`` for one particle (scalars in and out)."""
-    a = h / m
+def kick(v0, v1, v2, w0, w1, w2, f0, f1, f2, t0, t1, t2, u0, u1, u2, am, rp, ra, h):
+    """``v += h F/m``, ``omega += h I^-1 tau`` for one particle (scalars in and out),
+    with ``I^-1 tau = tau/I_perp + (1/I_axis - 1/I_perp)(tau . u) u``; ``am``, ``rp``,
+    ``ra`` are ``1/m``, ``1/I_perp``, ``1/I_axis`` (:func:`inverses`)."""
+    a = h * am
     tu = t0 * u0 + t1 * u1 + t2 * u2
-    c = (1.0 / ia - 1.0 / ip) * tu
-    return (v0 + a * f0, v1 + a * f1, v2 + a * f2, w0 + h * (t0 / ip + c * u0),
-            w1 + h * (t1 / ip + c * u1), w2 + h * (t2 / ip + c * u2))
+    c = (ra - rp) * tu
+    return (v0 + a * f0, v1 + a * f1, v2 + a * f2, w0 + h * (t0 * rp + c * u0),
+            w1 + h * (t1 * rp + c * u1), w2 + h * (t2 * rp + c * u2))
 
 
 @pnjit
-def _kick(v, omega, u, f, torque, mass, inertia, h):
+def _kick(v, omega, u, f, torque, inv, h):
     """``v += h F/m``, ``omega += h I^-1 tau``."""
     for i in prange(v.shape[0]):
         (v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2]) = kick(
             v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2], f[i, 0], f[i, 1],
             f[i, 2], torque[i, 0], torque[i, 1], torque[i, 2], u[i, 0], u[i, 1], u[i, 2],
-            mass[i], inertia[i, 0], inertia[i, 1], h)
+            inv[i, 0], inv[i, 1], inv[i, 2], h)
 
 
 @njit
-def free_step(q0, q1, q2, q3, u0, u1, u2, w0, w1, w2, ip, ia, dt):
+def free_step(q0, q1, q2, q3, u0, u1, u2, w0, w1, w2, ip, ia, rp, ra, dt):
     """Exact free symmetric-top rotation of one particle over ``dt`` at constant angular
-    momentum ``L = I omega``. Returns the new quaternion (4), axis (3) and ``omega`` (3)."""
+    momentum ``L = I omega`` (``rp``, ``ra``: ``1/I_perp``, ``1/I_axis``). Returns the
+    new quaternion (4), axis (3) and ``omega`` (3)."""
     wu = w0 * u0 + w1 * u1 + w2 * u2
     # L = I_perp omega + (I_axis - I_perp)(omega . u) u
     l0 = ip * w0 + (ia - ip) * wu * u0
@@ -292,19 +310,20 @@ def free_step(q0, q1, q2, q3, u0, u1, u2, w0, w1, w2, ip, ia, dt):
     u0, u1, u2 = axis_from(q0, q1, q2, q3)
     # omega = I^-1 L with the new axis
     lu = l0 * u0 + l1 * u1 + l2 * u2
-    c = (1.0 / ia - 1.0 / ip) * lu
-    return q0, q1, q2, q3, u0, u1, u2, l0 / ip + c * u0, l1 / ip + c * u1, l2 / ip + c * u2
+    c = (ra - rp) * lu
+    return q0, q1, q2, q3, u0, u1, u2, l0 * rp + c * u0, l1 * rp + c * u1, l2 * rp + c * u2
 
 
 @pnjit
-def _rotate_free(q, u, omega, inertia, half, dt):
+def _rotate_free(q, u, omega, inertia, inv, half, dt):
     """Exact free rotation of every rod over ``dt`` (spheres keep their orientation)."""
     for i in prange(q.shape[0]):
         if half[i] > 0.0:
             (q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2], omega[i, 0],
              omega[i, 1], omega[i, 2]) = free_step(
                 q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2], omega[i, 0],
-                omega[i, 1], omega[i, 2], inertia[i, 0], inertia[i, 1], dt)
+                omega[i, 1], omega[i, 2], inertia[i, 0], inertia[i, 1], inv[i, 1], inv[i, 2],
+                dt)
 
 
 @njit
@@ -326,7 +345,7 @@ def _planar_axis(q, u, i):
 
 
 @pnjit
-def _first_half(x, v, q, u, omega, f, torque, mass, inertia, half, box, periodic, h, dt, dim2):
+def _first_half(x, v, q, u, omega, f, torque, inertia, inv, half, box, periodic, h, dt, dim2):
     """Steps 1-2 of velocity Verlet for every particle: half kick, drift, free rotation
     (rods), wrap. In 2-D (``dim2``) the motion is kept in the plane exactly, as LAMMPS'
     ``fix enforce2d`` does: ``v_z = 0``, ``omega = (0, 0, w_z)``, spines in the plane (the
@@ -335,11 +354,11 @@ def _first_half(x, v, q, u, omega, f, torque, mass, inertia, half, box, periodic
     p0, p1, p2 = periodic[0], periodic[1], periodic[2]
     for i in prange(x.shape[0]):
         u0, u1, u2 = u[i, 0], u[i, 1], u[i, 2]
-        ip = inertia[i, 0]
-        ia = inertia[i, 1]
+        rp = inv[i, 1]
+        ra = inv[i, 2]
         v0, v1, v2, w0, w1, w2 = kick(v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1],
                                       omega[i, 2], f[i, 0], f[i, 1], f[i, 2], torque[i, 0],
-                                      torque[i, 1], torque[i, 2], u0, u1, u2, mass[i], ip, ia,
+                                      torque[i, 1], torque[i, 2], u0, u1, u2, inv[i, 0], rp, ra,
                                       h)
         v[i, 0] = v0
         v[i, 1] = v1
@@ -354,8 +373,8 @@ def _first_half(x, v, q, u, omega, f, torque, mass, inertia, half, box, periodic
             w1 = 0.0
         if half[i] > 0.0:
             (q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2], w0, w1,
-             w2) = free_step(q[i, 0], q[i, 1], q[i, 2], q[i, 3], u0, u1, u2, w0, w1, w2, ip, ia,
-                             dt)
+             w2) = free_step(q[i, 0], q[i, 1], q[i, 2], q[i, 3], u0, u1, u2, w0, w1, w2,
+                             inertia[i, 0], inertia[i, 1], rp, ra, dt)
             if dim2:
                 _planar_axis(q, u, i)
                 w0 = 0.0
@@ -369,16 +388,17 @@ def _first_half(x, v, q, u, omega, f, torque, mass, inertia, half, box, periodic
 
 
 @pnjit
-def _second_half(x, v, omega, u, f, torque, mass, inertia, radius, half, r_int, h, scale,
+def _second_half(x, v, omega, u, f, torque, mass, inertia, inv, radius, half, r_int, h, scale,
                  deform, sc, sc3, sc5):
     """Steps 4-5: half kick, affine remap of the positions (``scale`` per axis, when
-    ``deform``), growth of every particle by ``sc`` (when ``sc != 1``)."""
+    ``deform``), growth of every particle by ``sc`` (when ``sc != 1``; the call ends here,
+    so ``inv`` is not kept in step)."""
     s0, s1, s2 = scale[0], scale[1], scale[2]
     for i in prange(x.shape[0]):
         (v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2]) = kick(
             v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2], f[i, 0], f[i, 1],
             f[i, 2], torque[i, 0], torque[i, 1], torque[i, 2], u[i, 0], u[i, 1], u[i, 2],
-            mass[i], inertia[i, 0], inertia[i, 1], h)
+            inv[i, 0], inv[i, 1], inv[i, 2], h)
         if deform:
             if s0 != 1.0:
                 x[i, 0] *= s0
@@ -396,7 +416,7 @@ def _second_half(x, v, omega, u, f, torque, mass, inertia, radius, half, r_int, 
 
 
 @pnjit
-def _half_and_half(x, v, q, u, omega, f, torque, mass, inertia, radius, half, r_int, box,
+def _half_and_half(x, v, q, u, omega, f, torque, mass, inertia, inv, radius, half, r_int, box,
                    periodic, h, dt, dim2, scale, deform, sc, sc3, sc5):
     """:func:`_second_half` of one step and :func:`_first_half` of the next in one pass
     over the particles: the same operations in the same order per particle (the same
@@ -410,12 +430,12 @@ def _half_and_half(x, v, q, u, omega, f, torque, mass, inertia, radius, half, r_
         u0, u1, u2 = u[i, 0], u[i, 1], u[i, 2]
         f0, f1, f2 = f[i, 0], f[i, 1], f[i, 2]
         t0, t1, t2 = torque[i, 0], torque[i, 1], torque[i, 2]
-        ip = inertia[i, 0]
-        ia = inertia[i, 1]
-        m = mass[i]
+        am = inv[i, 0]
+        rp = inv[i, 1]
+        ra = inv[i, 2]
         v0, v1, v2, w0, w1, w2 = kick(v[i, 0], v[i, 1], v[i, 2], omega[i, 0], omega[i, 1],
-                                      omega[i, 2], f0, f1, f2, t0, t1, t2, u0, u1, u2, m, ip,
-                                      ia, h)
+                                      omega[i, 2], f0, f1, f2, t0, t1, t2, u0, u1, u2, am, rp,
+                                      ra, h)
         x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
         if deform:
             if s0 != 1.0:
@@ -428,14 +448,20 @@ def _half_and_half(x, v, q, u, omega, f, torque, mass, inertia, radius, half, r_
             radius[i] *= sc
             half[i] *= sc
             r_int[i] *= sc
-            m *= sc3
+            m = mass[i] * sc3
             mass[i] = m
-            ip *= sc5
-            ia *= sc5
+            ip = inertia[i, 0] * sc5
+            ia = inertia[i, 1] * sc5
             inertia[i, 0] = ip
             inertia[i, 1] = ia
+            am = 1.0 / m
+            rp = 1.0 / ip
+            ra = 1.0 / ia
+            inv[i, 0] = am
+            inv[i, 1] = rp
+            inv[i, 2] = ra
         v0, v1, v2, w0, w1, w2 = kick(v0, v1, v2, w0, w1, w2, f0, f1, f2, t0, t1, t2, u0, u1,
-                                      u2, m, ip, ia, h)
+                                      u2, am, rp, ra, h)
         v[i, 0] = v0
         v[i, 1] = v1
         v[i, 2] = v2
@@ -449,8 +475,8 @@ def _half_and_half(x, v, q, u, omega, f, torque, mass, inertia, radius, half, r_
             w1 = 0.0
         if half[i] > 0.0:
             (q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2], w0, w1,
-             w2) = free_step(q[i, 0], q[i, 1], q[i, 2], q[i, 3], u0, u1, u2, w0, w1, w2, ip, ia,
-                             dt)
+             w2) = free_step(q[i, 0], q[i, 1], q[i, 2], q[i, 3], u0, u1, u2, w0, w1, w2,
+                             inertia[i, 0], inertia[i, 1], rp, ra, dt)
             if dim2:
                 _planar_axis(q, u, i)
                 w0 = 0.0
@@ -490,6 +516,8 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
     rebuilds, steps done)``.
     """
     h = 0.5 * dt
+    inv = np.empty((x.shape[0], 3))  # from mass and inertia at every call: never stale
+    inverses(mass, inertia, inv)
     pe = 0.0
     nc = 0
     nw = 0
@@ -511,10 +539,10 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
     for k in range(nsteps):
         t = clock[0] + (clock[2] + k + 1 - clock[1]) * dt
         if k == 0:
-            _first_half(x, v, q, u, omega, f, torque, mass, inertia, half, box, periodic, h,
+            _first_half(x, v, q, u, omega, f, torque, inertia, inv, half, box, periodic, h,
                         dt, dim2)
         else:  # the previous step's second half with this one's first
-            _half_and_half(x, v, q, u, omega, f, torque, mass, inertia, radius, half, r_int,
+            _half_and_half(x, v, q, u, omega, f, torque, mass, inertia, inv, radius, half, r_int,
                            box, periodic, h, dt, dim2, scale, deform, sc, sc3, sc5)
         pi, pj, istart, jstart, jk, hist, fj, rebuilt = maybe_rebuild(
             x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,
@@ -531,7 +559,7 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
             done = k + 1
             break
     if nsteps > 0:
-        _second_half(x, v, omega, u, f, torque, mass, inertia, radius, half, r_int, h, scale,
+        _second_half(x, v, omega, u, f, torque, mass, inertia, inv, radius, half, r_int, h, scale,
                      deform, sc, sc3, sc5)
     return pi, pj, istart, jstart, jk, hist, fj, pe, nc, nw, rebuilds, done
 
@@ -754,6 +782,8 @@ def fire_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
     f_inc, f_dec, alpha0, f_alpha, n_delay = 1.1, 0.5, 0.1, 0.99, 5
     whist = np.zeros((0, 3))
     part = np.zeros(((n + BLOCK - 1) // BLOCK, _FIRE_SUMS))
+    inv = np.empty((n, 3))
+    inverses(mass, inertia, inv)
     pe = 0.0
     nc = 0
     fmax = 0.0
@@ -780,11 +810,11 @@ def fire_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
         dt = fire[0]
         alpha = fire[1]
         # semi-implicit Euler: v += dt F/m, then mix, then move
-        _kick(v, omega, u, f, torque, mass, inertia, dt)
+        _kick(v, omega, u, f, torque, inv, dt)
         vn, wn = _speed_sums(v, omega, part)
         _fire_mix(x, v, omega, f, torque, alpha, np.sqrt(vn), np.sqrt(wn), np.sqrt(fn2),
                   np.sqrt(tn2), dt)
-        _rotate_free(q, u, omega, inertia, half, dt)
+        _rotate_free(q, u, omega, inertia, inv, half, dt)
         wrap(x, box, periodic)
         pi, pj, istart, jstart, jk, hist, fj, _ = maybe_rebuild(
             x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,

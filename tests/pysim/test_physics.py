@@ -236,6 +236,42 @@ def test_compression_and_growth_drivers_keep_n_and_follow_the_schedule(dim):
     assert np.all((st.x[:, per] >= 0) & (st.x[:, per] < st.box[per]))
 
 
+def test_growing_particles_fall_at_g_and_keep_their_spin():
+    """The kicks multiply by reciprocals of mass and inertia (``integrators.inverses``)
+    that must follow the particles' growth within a call: a free particle falls at g
+    whatever its mass (a stale ``1/m`` would give it ``g m(t)/m(0)``), and a free rod's
+    spin is ``I^-1 (I omega)`` through every step (a stale ``1/I`` scales it by the
+    growth of ``I`` per step)."""
+    x = np.array([[2.0, 2.0, 2.0], [6.0, 6.0, 6.0]])
+    u = np.array([[0.0, 0.6, 0.8], [1.0, 0.0, 0.0]])
+    w = np.array([[0.3, -0.2, 0.5], [0.0, 0.0, 0.0]])
+    st = State.create(x, np.full(2, 0.5), np.array([2.0, 0.0]), np.full(3, 10.0), axis=u,
+                      omega=w)
+    g, dt, nsteps = 2.0, 1e-4, 2000
+    sim = Simulation(st, ContactModel("hooke", 1e5), dt=dt, gravity=(0.0, 0.0, -g))
+    m0 = st.mass.copy()
+    w0 = np.linalg.norm(st.omega[0])
+    rate = 5.0
+    sim.run(nsteps, growth_rate=rate)  # every mass grows e^3-fold
+    assert st.mass[0] / m0[0] == pytest.approx(math.exp(3.0), rel=1e-9)
+    # the half kick after a step's growth applies the force m g of the mass before it:
+    # g/s3 (s3 = exp(3 rate dt)); the first and the last half kick apply g
+    s3 = math.exp(3 * rate * dt)
+    fall = 0.5 * dt * g * (2 + (nsteps - 1) * (1 + 1 / s3))
+    np.testing.assert_allclose(st.v[:, 2], -fall, rtol=1e-10)
+    np.testing.assert_allclose(st.v[:, :2], 0.0, atol=1e-15)
+    assert np.linalg.norm(st.omega[0]) == pytest.approx(w0, rel=1e-12)
+
+
+def test_inverses_are_the_reciprocals_of_mass_and_inertia():
+    from pysim.integrators import inverses
+
+    st = rod_gas(3, 200, seed=3)
+    inv = np.empty((st.n, 3))
+    inverses(st.mass, st.inertia, inv)
+    np.testing.assert_array_equal(inv, 1.0 / np.column_stack([st.mass, st.inertia]))
+
+
 def test_compression_stage_plan_reaches_the_target():
     x, d, box = random_spheres(np.ones(200), 0.25, seed=2)
     st = State.spheres(x, d / 2, box)
