@@ -502,8 +502,14 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
 #: non-negative (``a[-1]``), three instructions per access, and it cannot prove it for a
 #: chunk's columns (the small index lists ``kk``, ``ka``... are still written with signed
 #: counters). Forces of the bench's 10^4 spheres, one thread,
-#: three alternations: 104-112 ns per sphere with signed indices, 93-101 unsigned
-CAP = 128
+#: three alternations: 104-112 ns per sphere with signed indices, 93-101 unsigned.
+#: 96, not 128: the scratch (31 rows, 23 KB) then leaves room in the 48 KB first-level
+#: cache of this project's Intel machine. Steps of the bench's 10^4 spheres with
+#: friction, one process, alternating, min over 11 rounds, ns per sphere-step: one thread
+#: 140.5 with 128, 135.3 with 96, 135.9 with 80, 137.6 with 64; two threads 78.0, 76.5,
+#: 74.8, 77.5; without friction no change (89.2 with 96, 88.1 with 128). The rods' chunks
+#: (:data:`RCAP`) gained nothing from 96 and lost with 64
+CAP = 96
 # rows of the scratch: inputs (gap d, |d|^2, radii, velocities and spins of i and j, spring),
 # then outputs (force on i, torque on i, torque on j, overlap); the spring is updated in place
 _D, _DIST2, _RI, _RJ, _VI, _VJ, _WI, _WJ, _H = 0, 3, 4, 5, 6, 9, 12, 15, 18
