@@ -535,11 +535,13 @@ def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, 
     minimum image is two selects per axis (the same values as the ``if``/``elif`` it
     replaced): a step of the bench's 10^4 spheres with friction, one thread, took 149 ns
     per sphere with the branches and 145 with the selects (the pairs across the box
-    faces lie scattered in the pair order and mispredicted)."""
+    faces lie scattered in the pair order and mispredicted). The first loop runs on
+    unsigned pair numbers (132.5 ns per sphere-step with signed ones, 130.0 unsigned,
+    median of 11 alternations)."""
     hb0, hb1, hb2 = 0.5 * b0, 0.5 * b1, 0.5 * b2
     m = 0
     mo = 0
-    for k in range(k0, k1):
+    for k in range(np.uint64(k0), np.uint64(k1)):
         i = np.uint64(pi[k])  # unsigned: no negative-index wraparound
         j = np.uint64(pj[k])
         d0 = x[j, 0] - x[i, 0]
