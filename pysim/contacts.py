@@ -533,11 +533,10 @@ def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, 
     pair in reach keeps; ``ko`` collects the others), the second copies velocities, spins
     and springs of the pairs in reach only. Returns the number of pairs in reach. The
     minimum image is two selects per axis (the same values as the ``if``/``elif`` it
-    replaced): a step of the bench's 10^4 spheres with friction, one thread, took 149 ns
-    per sphere with the branches and 145 with the selects (the pairs across the box
-    faces lie scattered in the pair order and mispredicted). The first loop runs on
-    unsigned pair numbers (132.5 ns per sphere-step with signed ones, 130.0 unsigned,
-    median of 11 alternations)."""
+    replaced): a step of the bench's 10^4 spheres with friction, one thread, took 145.4
+    and 150.2 ns per sphere with the branches and 144.3 and 145.5 with the selects
+    (medians of two runs). The first loop runs on unsigned pair numbers (132.7 ns per
+    sphere-step with signed ones, 130.4 unsigned, medians of 11 alternations)."""
     hb0, hb1, hb2 = 0.5 * b0, 0.5 * b1, 0.5 * b2
     m = 0
     mo = 0

@@ -262,8 +262,8 @@ def inverses(mass, inertia, inv):
     """``inv[i] = (1/m_i, 1/I_perp,i, 1/I_axis,i)``, the reciprocals the kicks multiply
     by, so that the per-particle loops divide only when the particles grow (kept in
     step there). Dividing, the two kicks of a step took 12 scalar divisions per
-    particle: the bench's 10^4 spheres with friction, one thread, 145 ns per
-    sphere-step with them, 138 with the reciprocals. Taken from ``mass`` and
+    particle: the bench's 10^4 spheres with friction, one thread, 145.5 ns per
+    sphere-step with them, 138.8 with the reciprocals (medians of 9 alternations). Taken from ``mass`` and
     ``inertia`` at the start of every call of the integrators, never kept between
     calls, so that a change to either is never missed."""
     for i in prange(mass.shape[0]):
