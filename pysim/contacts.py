@@ -519,8 +519,11 @@ _NS = 31
 #: hold an earlier chunk's values, computed and ignored): LLVM runs the loop on 8-wide
 #: vectors and the remainder one pair at a time, so a chunk's last pairs would each cost a
 #: whole scalar law. Measured on the bench state with friction: with 16 a step takes
-#: 0.94-0.95 of the time before this gather; with 8, 32 or no padding 0.97-0.98
-PAD = 16
+#: 0.94-0.95 of the time before this gather; with 8, 32 or no padding 0.97-0.98. With
+#: chunks of 96 (:data:`CAP`, session 39, Intel machine) 8 is better: spheres, one
+#: thread, medians of 11 alternations 132.4 and 130.5 ns per sphere-step against 134.2 and
+#: 133.0 with 16; two threads 74.1 against 75.2; the rods' steps 160.0 against 165.2
+PAD = 8
 
 
 @njit
