@@ -257,19 +257,25 @@ def _planar_forces(f, torque):
         torque[i, 1] = 0.0
 
 
+@njit
+def reciprocals(m, ip, ia):
+    """``(1/m, 1/I_perp, 1/I_axis)`` of one particle: what :func:`inverses` stores, and
+    what the growth in :func:`_half_and_half` stores again (the same values, so that a run
+    cut into calls keeps its bits)."""
+    return 1.0 / m, 1.0 / ip, 1.0 / ia
+
+
 @pnjit
 def inverses(mass, inertia, inv):
     """``inv[i] = (1/m_i, 1/I_perp,i, 1/I_axis,i)``, the reciprocals the kicks multiply
     by, so that the per-particle loops divide only when the particles grow (kept in
     step there). Dividing, the two kicks of a step took 12 scalar divisions per
     particle: the bench's 10^4 spheres with friction, one thread, 145.5 ns per
-    sphere-step with them, 138.8 with the reciprocals (medians of 9 alternations). Taken from ``mass`` and
-    ``inertia`` at the start of every call of the integrators, never kept between
-    calls, so that a change to either is never missed."""
+    sphere-step with them, 138.8 with the reciprocals (medians of 9 alternations).
+    Taken from ``mass`` and ``inertia`` at the start of every call of the integrators,
+    never kept between calls, so that a change to either is never missed."""
     for i in prange(mass.shape[0]):
-        inv[i, 0] = 1.0 / mass[i]
-        inv[i, 1] = 1.0 / inertia[i, 0]
-        inv[i, 2] = 1.0 / inertia[i, 1]
+        inv[i, 0], inv[i, 1], inv[i, 2] = reciprocals(mass[i], inertia[i, 0], inertia[i, 1])
 
 
 @njit
@@ -454,9 +460,7 @@ def _half_and_half(x, v, q, u, omega, f, torque, mass, inertia, inv, radius, hal
             ia = inertia[i, 1] * sc5
             inertia[i, 0] = ip
             inertia[i, 1] = ia
-            am = 1.0 / m
-            rp = 1.0 / ip
-            ra = 1.0 / ia
+            am, rp, ra = reciprocals(m, ip, ia)
             inv[i, 0] = am
             inv[i, 1] = rp
             inv[i, 2] = ra
