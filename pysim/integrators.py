@@ -499,10 +499,10 @@ def _half_and_half_part(lo, hi, x, v, q, u, omega, f, torque, mass, inertia, inv
     after the other, its rods are copied as they pass into a scratch, one column each,
     and turn there together (:func:`_rotate_lanes`, the bits of :func:`free_step`). Else
     (spheres) in one loop, a rod calling :func:`free_step` where it passes. Per rod-step
-    on the bench's 10^4 rods, one thread: 64 ns rod by rod, 29 with the lanes; the
-    spheres' loop takes 10.3 ns per sphere-step either way, and 12.5 in blocks. The body
-    is written out, not a function called per particle with the arrays: each such call
-    took 50-180 ns more (reference counts of its array arguments)."""
+    on the bench's 10^4 rods, one thread: 64 ns rod by rod, 28 with the lanes; the
+    spheres' loop 10.4-10.5 ns per sphere-step (10.2-10.3 before the blocks). The body is
+    written out, not a function called per particle with the arrays: each such call took
+    50-190 ns more (reference counts of its array arguments)."""
     s0, s1, s2 = scale[0], scale[1], scale[2]
     b0, b1, b2 = box[0], box[1], box[2]
     p0, p1, p2 = periodic[0], periodic[1], periodic[2]
