@@ -383,22 +383,32 @@ def _rotate_free(q, u, omega, inertia, inv, half, dt):
                 dt)
 
 
-@njit
-def _planar_axis(q, u, i):
-    """2-D: put particle ``i``'s spine back in the plane, unit length, and its quaternion
-    on the shortest arc from ``e_z`` to it, ``(1, -u_y, u_x, 0)/sqrt(2)``."""
-    a0 = u[i, 0]
-    a1 = u[i, 1]
-    an = np.sqrt(a0 * a0 + a1 * a1)
-    a0 /= an
-    a1 /= an
-    u[i, 0] = a0
-    u[i, 1] = a1
-    u[i, 2] = 0.0
-    q[i, 0] = SQRT_HALF
-    q[i, 1] = -a1 * SQRT_HALF
-    q[i, 2] = a0 * SQRT_HALF
-    q[i, 3] = 0.0
+@inline_njit
+def _in_plane(q0, q1, q2, q3, u0, u1, u2, w0, w1, w2, dim2):
+    """One rod's quaternion, axis and ``omega``, in 2-D (``dim2``) put back in the plane:
+    the spine in the plane with unit length, the quaternion on the shortest arc from
+    ``e_z`` to it, ``(1, -u_y, u_x, 0)/sqrt(2)``, and ``omega = (0, 0, w_z)``; else
+    unchanged. Scalars only, so that the per-particle loops can call it at no cost."""
+    if dim2:
+        an = np.sqrt(u0 * u0 + u1 * u1)
+        u0 /= an
+        u1 /= an
+        return SQRT_HALF, -u1 * SQRT_HALF, u0 * SQRT_HALF, 0.0, u0, u1, 0.0, 0.0, 0.0, w2
+    return q0, q1, q2, q3, u0, u1, u2, w0, w1, w2
+
+
+@inline_njit
+def _turn(q0, q1, q2, q3, u0, u1, u2, w0, w1, w2, ip, ia, rp, ra, dt, dim2):
+    """:func:`free_step` of one rod, kept in the plane in 2-D (:func:`_in_plane`)."""
+    r = free_step(q0, q1, q2, q3, u0, u1, u2, w0, w1, w2, ip, ia, rp, ra, dt)
+    return _in_plane(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9], dim2)
+
+
+@inline_njit
+def _wrap3(x0, x1, x2, b0, b1, b2, p0, p1, p2):
+    """A position wrapped into the box along its periodic axes (:func:`wrap1`)."""
+    return (wrap1(x0, b0) if p0 else x0, wrap1(x1, b1) if p1 else x1,
+            wrap1(x2, b2) if p2 else x2)
 
 
 @pnjit
@@ -430,18 +440,12 @@ def _first_half(x, v, q, u, omega, f, torque, inertia, inv, half, box, periodic,
             w1 = 0.0
         if half[i] > 0.0:
             (q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2], w0, w1,
-             w2) = free_step(q[i, 0], q[i, 1], q[i, 2], q[i, 3], u0, u1, u2, w0, w1, w2,
-                             inertia[i, 0], inertia[i, 1], rp, ra, dt)
-            if dim2:
-                _planar_axis(q, u, i)
-                w0 = 0.0
-                w1 = 0.0
+             w2) = _turn(q[i, 0], q[i, 1], q[i, 2], q[i, 3], u0, u1, u2, w0, w1, w2,
+                         inertia[i, 0], inertia[i, 1], rp, ra, dt, dim2)
         omega[i, 0] = w0
         omega[i, 1] = w1
         omega[i, 2] = w2
-        x[i, 0] = wrap1(x0, b0) if p0 else x0
-        x[i, 1] = wrap1(x1, b1) if p1 else x1
-        x[i, 2] = wrap1(x2, b2) if p2 else x2
+        x[i, 0], x[i, 1], x[i, 2] = _wrap3(x0, x1, x2, b0, b1, b2, p0, p1, p2)
 
 
 @pnjit
@@ -576,18 +580,12 @@ def _half_and_half_part(lo, hi, x, v, q, u, omega, f, torque, mass, inertia, inv
                     m += 1
                 else:
                     (q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2], w0, w1,
-                     w2) = free_step(q[i, 0], q[i, 1], q[i, 2], q[i, 3], u0, u1, u2, w0, w1, w2,
-                                     inertia[i, 0], inertia[i, 1], rp, ra, dt)
-                    if dim2:
-                        _planar_axis(q, u, i)
-                        w0 = 0.0
-                        w1 = 0.0
+                     w2) = _turn(q[i, 0], q[i, 1], q[i, 2], q[i, 3], u0, u1, u2, w0, w1, w2,
+                                 inertia[i, 0], inertia[i, 1], rp, ra, dt, dim2)
             omega[i, 0] = w0
             omega[i, 1] = w1
             omega[i, 2] = w2
-            x[i, 0] = wrap1(x0, b0) if p0 else x0
-            x[i, 1] = wrap1(x1, b1) if p1 else x1
-            x[i, 2] = wrap1(x2, b2) if p2 else x2
+            x[i, 0], x[i, 1], x[i, 2] = _wrap3(x0, x1, x2, b0, b1, b2, p0, p1, p2)
         if m > 0:
             _turn_rows(T, m, rows, q, u, omega, inertia, inv, dt, dim2)
 
@@ -597,27 +595,25 @@ def _turn_rows(T, m, rows, q, u, omega, inertia, inv, dt, dim2):
     """The ``m`` rods gathered in scratch ``T`` (rows ``rows``, ``omega`` after the
     kicks) turned on SIMD lanes (:func:`_rotate_lanes`) and stored; a rod whose
     half-angle lies past the series takes :func:`free_step` again, with the library's
-    sine and cosine. In 2-D the spines go back into the plane (:func:`_planar_axis`)."""
+    sine and cosine. In 2-D the spines go back into the plane (:func:`_in_plane`)."""
     B = ROT_BLOCK
     _rotate_lanes(T, m, dt)
     for c in range(m):
         i = rows[c]
         k = np.uint64(c)
         if T[np.uint64(_TOK * B) + k] != 0.0:
-            for e in range(4):
-                q[i, e] = T[np.uint64((_TQ + e) * B) + k]
-            for e in range(3):
-                u[i, e] = T[np.uint64((_TU + e) * B) + k]
-                omega[i, e] = T[np.uint64((_TW + e) * B) + k]
+            r = (T[np.uint64(_TQ * B) + k], T[np.uint64((_TQ + 1) * B) + k],
+                 T[np.uint64((_TQ + 2) * B) + k], T[np.uint64((_TQ + 3) * B) + k],
+                 T[np.uint64(_TU * B) + k], T[np.uint64((_TU + 1) * B) + k],
+                 T[np.uint64((_TU + 2) * B) + k], T[np.uint64(_TW * B) + k],
+                 T[np.uint64((_TW + 1) * B) + k], T[np.uint64((_TW + 2) * B) + k])
         else:
-            (q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2], omega[i, 0],
-             omega[i, 1], omega[i, 2]) = free_step(
-                q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2], omega[i, 0],
-                omega[i, 1], omega[i, 2], inertia[i, 0], inertia[i, 1], inv[i, 1], inv[i, 2], dt)
-        if dim2:
-            _planar_axis(q, u, i)
-            omega[i, 0] = 0.0
-            omega[i, 1] = 0.0
+            r = free_step(q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2],
+                          omega[i, 0], omega[i, 1], omega[i, 2], inertia[i, 0], inertia[i, 1],
+                          inv[i, 1], inv[i, 2], dt)
+        (q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2], omega[i, 0],
+         omega[i, 1], omega[i, 2]) = _in_plane(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7],
+                                               r[8], r[9], dim2)
 
 
 #: pairs from which :func:`verlet_chunk` returns to its caller after a list rebuild, to
