@@ -27,6 +27,7 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
+import warnings
 from pathlib import Path
 
 import numba
@@ -70,6 +71,28 @@ PARALLEL_FLAGS = dict(JIT_FLAGS, parallel=True)
 # The OpenMP layer starts a parallel region in a few microseconds (the kernels start
 # five per time step); fall back to Numba's own pool where libgomp is missing.
 numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
+
+
+def _layer_started_elsewhere() -> str | None:
+    """The threading layer Numba's threads already run on when something started them
+    before pysim was imported (``numba.set_num_threads``, a parallel kernel) on another
+    layer than OpenMP: the priority above then had no say. None otherwise, and when
+    ``NUMBA_THREADING_LAYER`` names a layer on purpose."""
+    from numba.np.ufunc import parallel
+
+    if not parallel._is_initialized or os.environ.get("NUMBA_THREADING_LAYER"):
+        return None
+    layer = numba.threading_layer()
+    return None if layer == "omp" else layer
+
+
+if (_early_layer := _layer_started_elsewhere()) is not None:
+    warnings.warn(
+        f"Numba's threads were started on the {_early_layer!r} layer before pysim was "
+        "imported, so pysim could not choose OpenMP; on 2 threads a step of 10^4 rods took "
+        "1.6 times as long on 'tbb' and about 2 times on 'workqueue' (docs/performance.md, "
+        "session 42). Import pysim before calling numba.set_num_threads, or set "
+        "NUMBA_THREADING_LAYER to choose a layer on purpose.", RuntimeWarning, stacklevel=2)
 
 njit = numba.njit(**JIT_FLAGS)
 """Decorator: ``@njit`` compiles a kernel with the project's JIT flags."""

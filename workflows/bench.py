@@ -12,10 +12,11 @@ same contact model and time step; :data:`MODEL`):
   as rigid glued-sphere rods (9 spheres, spacing ``D/2``, :mod:`workflows.glued`).
 * ``scaling``: pysim alone, spheres and rods tiled from the dense states to ``N`` up to
   10^6 and sorted by cell (:func:`pysim.neighbors.spatial_order`: row-major, the longest
-  box axis slowest; LAMMPS sorts its atoms likewise): seconds per step and
-  peak memory, on 1 and on 2 threads, each point timed three times in rounds over all
-  points; printed as the time per particle-step (the fastest timing) relative to
-  ``N = 10^4`` (:func:`scaling_spread`).
+  box axis slowest; LAMMPS sorts its atoms likewise): the same 20 steps of the same
+  trajectory at every size (small sizes repeat them from the tiled state, :func:`run`),
+  seconds per step and peak memory, on 1 and on 2 threads, each point timed three times
+  in rounds over all points; printed as the time per particle-step (the fastest timing)
+  relative to ``N = 10^4`` (:func:`scaling_spread`).
 
 Every timing is the engine's own loop time (LAMMPS/LIGGGHTS ``Loop time``; pysim the
 wall time of ``Simulation.run``), in a fresh process, engines alternating within each
@@ -28,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import gc
 import json
 import os
 import re
@@ -43,6 +45,9 @@ PROJECT_ROOT = Path(__file__).resolve().parents[1]
 DECKS = PROJECT_ROOT / "inputs"
 #: the contact model and time step of every case (D = 1, rho = 1): t_c ~ 50 dt
 MODEL = dict(k_n=1e5, gamma_n=50.0, k_t=2e4, gamma_t=10.0, mu=0.5, dt=1e-4)
+#: untimed steps of pysim before a timing (the compiled kernels load, the thread pool
+#: starts); a scaling point's timed steps are the ones after these
+WARM_STEPS = 20
 FIELDS = ["case", "engine", "cores", "n", "steps", "seconds", "throughput"]
 
 
@@ -157,11 +162,12 @@ def run_liggghts(data: Path, cores: int, steps: int, extra: dict, work: Path) ->
     return _loop_time(p.stdout)
 
 
-def run_pysim(state: Path, cores: int, steps: int, friction: bool) -> dict:
-    """``{"seconds", "peak_rss", "base_rss"}`` of ``steps`` pysim steps on ``cores`` Numba
-    threads, in a fresh process (:func:`_pysim_child`)."""
+def run_pysim(state: Path, cores: int, steps: int, friction: bool, segments: int = 1) -> dict:
+    """``{"seconds", "peak_rss", "base_rss", ...}`` of ``steps`` pysim steps on ``cores``
+    Numba threads (``segments`` times from the same state, summed), in a fresh process
+    (:func:`_pysim_child`)."""
     cmd = [sys.executable, "-m", "workflows.bench", "_pysim", str(state), str(steps),
-           "1" if friction else "0"]
+           "1" if friction else "0", str(int(segments))]
     p = subprocess.run(cmd, capture_output=True, text=True, env=_env(cores), cwd=PROJECT_ROOT,
                        timeout=7200)
     if p.returncode != 0:
@@ -180,7 +186,12 @@ def _memory(key: str) -> int:
     raise KeyError(f"{key} not in /proc/self/status")
 
 
-def _pysim_child(state: str, steps: int, friction: bool):
+def _pysim_child(state: str, steps: int, friction: bool, segments: int = 1):
+    """Print, as JSON, the wall time of ``steps`` steps of the state in ``state`` after
+    :data:`WARM_STEPS` untimed ones, summed over ``segments`` runs each from the state as
+    loaded (so each times the same steps of the same trajectory), with the peak and base
+    resident memory, the list rebuilds in the timed steps and each segment's contacts at
+    its end."""
     import pysim.simulation as ps
     from pysim import State
 
@@ -199,23 +210,31 @@ def _pysim_child(state: str, steps: int, friction: bool):
     else:
         x, dia, box = random_spheres(np.ones(100), 0.3, seed=1)
         tiny = State.spheres(x, dia / 2, box)
-    ps.Simulation(tiny, model, dt=m["dt"]).run(20)
+    ps.Simulation(tiny, model, dt=m["dt"]).run(WARM_STEPS)
     del tiny
     base = _memory("VmRSS")
-    if "u" in d.files:
-        st = State.create(d["x"], d["radius"], d["length"], d["box"], axis=d["u"])
-    else:
-        st = State.spheres(d["x"], d["radius"], d["box"])
-    sim = ps.Simulation(st, model, dt=m["dt"])
-    sim.run(20)  # loads the compiled kernels, starts the thread pool
-    rebuilds = sim.rebuilds
-    t0 = time.perf_counter()
-    sim.run(steps)
-    sec = time.perf_counter() - t0
+    sec = 0.0
+    rebuilds = 0
+    contacts = []
+    for _ in range(max(1, segments)):
+        if "u" in d.files:
+            st = State.create(d["x"], d["radius"], d["length"], d["box"], axis=d["u"])
+        else:
+            st = State.spheres(d["x"], d["radius"], d["box"])
+        sim = ps.Simulation(st, model, dt=m["dt"])
+        sim.run(WARM_STEPS)  # loads the compiled kernels, starts the thread pool
+        before = sim.rebuilds
+        t0 = time.perf_counter()
+        sim.run(steps)
+        sec += time.perf_counter() - t0
+        rebuilds += sim.rebuilds - before
+        contacts.append(sim.thermo().n_contacts)
+        del sim, st  # the next segment's arrays replace these, not join them
+        gc.collect()
     peak = _memory("VmHWM")
     print(json.dumps({"seconds": sec, "peak_rss": peak, "base_rss": base,
-                      "contacts": sim.thermo().n_contacts,
-                      "rebuilds": sim.rebuilds - rebuilds}))
+                      "contacts": contacts[-1], "segment_contacts": contacts,
+                      "rebuilds": rebuilds}))
 
 
 # -- the benchmark ----------------------------------------------------------------------------
@@ -273,13 +292,24 @@ def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, rep
         cores=(1, 2), engines=("pysim", "lammps-legacy", "lammps-granular", "liggghts"),
         scaling=(1_000, 10_000, 100_000, 1_000_000), scaling_steps=20, scaling_work=2e7,
         scaling_repeats=3, log=print):
-    """The whole benchmark; returns the rows written to ``out``. Each scaling point runs
-    ``scaling_work`` particle-steps (at least ``scaling_steps`` steps), so that the small
-    systems are timed over as long as the large ones (20 steps of 10^4 spheres take 20 ms,
-    and repeated runs of them scattered by 30 %), ``scaling_repeats`` times on each core
-    count, in rounds over all points (:func:`scaling_spread` takes the fastest: single
-    timings of 10^5 rods gave 1.50 and 1.36 times the 10^4 time in two runs of the same
-    code, and the machine's speed drifts by 10-20 % over minutes)."""
+    """The whole benchmark; returns the rows written to ``out``.
+
+    Each scaling point times the same steps of the same trajectory at every ``N``: the
+    ``scaling_steps`` steps after :data:`WARM_STEPS`, from the tiled state as written. A
+    small system repeats that segment, each time from the state as written, until it
+    has run about ``scaling_work`` particle-steps (``segments``, in the row's ``steps``
+    as ``scaling_steps * segments``), so that it is timed over as long as the large ones
+    (20 steps of 10^4 spheres take 20 ms, and single runs of them scattered by 30 %).
+    Not more steps of one run instead: the bench's rods at phi 0.5 unjam as they run
+    (1.22 contacts per rod at step 40, 0.11 at step 2000) and each step costs less with
+    fewer contacts and a younger neighbour list, so a small system timed over 2000
+    steps and the largest over 20 compared different states, not sizes (the rods'
+    10^6 point read 1.38 times the 10^4 one that way, 1.21 over the same steps;
+    ``docs/performance.md``, session 42). Every point is timed ``scaling_repeats``
+    times on each core count, in rounds over all points (:func:`scaling_spread` takes
+    the fastest: single timings of 10^5 rods gave 1.50 and 1.36 times the 10^4 time in
+    two runs of the same code, and the machine's speed drifts by 10-20 % over
+    minutes)."""
     out = Path(out).resolve()  # the peers run in the work folder: paths must be absolute
     work = out.parent / "bench"
     busy = busy_cores()
@@ -343,14 +373,16 @@ def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, rep
                 if not path.exists():  # tile and sort only once (10^6: seconds)
                     arrays, box = tile([d[k] for k in names], d["box"], reps)
                     np.savez(path, box=box, **dict(zip(names, arrays)))
-                points.append((kind, path, n, max(scaling_steps, int(round(scaling_work / n)))))
+                segments = max(1, int(round(scaling_work / (n * scaling_steps))))
+                points.append((kind, path, n, scaling_steps, segments))
         # every point once per round, so that a slow spell of the machine slows one
         # timing of every size rather than both timings of one size
         for _ in range(scaling_repeats):
-            for kind, path, n, nsteps in points:
+            for kind, path, n, nsteps, segments in points:
                 for c in cores:
-                    r = run_pysim(path, c, nsteps, True)
-                    add(f"scaling_{kind}", "pysim", c, n, nsteps, r["seconds"],
+                    r = run_pysim(path, c, nsteps, True, segments)
+                    add(f"scaling_{kind}", "pysim", c, n, nsteps * segments, r["seconds"],
+                        segments=segments,
                         bytes_per_particle=round((r["peak_rss"] - r["base_rss"]) / n),
                         peak_mib=round(r["peak_rss"] / 2**20), list_rebuilds=r["rebuilds"])
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -437,7 +469,7 @@ def plot(rows, path: Path):
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if argv and argv[0] == "_pysim":
-        _pysim_child(argv[1], int(argv[2]), argv[3] == "1")
+        _pysim_child(argv[1], int(argv[2]), argv[3] == "1", int(argv[4]) if len(argv) > 4 else 1)
         return 0
     ap = argparse.ArgumentParser(prog="python -m workflows.bench", description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", type=Path, default=PROJECT_ROOT / "results" / "bench.csv")

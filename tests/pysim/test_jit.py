@@ -39,3 +39,30 @@ def test_prefetch_write_needs_a_contiguous_array():
     strided = np.zeros((10, 6))[:, :3]  # rows of 3 with a stride of 6
     with pytest.raises(numba.core.errors.TypingError):
         _touch(strided, np.arange(2, dtype=np.int32))
+
+
+def _import_after(started: str) -> str:
+    """The warnings (stderr) of a fresh interpreter that runs ``started`` and then
+    imports pysim."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    env = {k: v for k, v in __import__("os").environ.items() if k != "NUMBA_THREADING_LAYER"}
+    p = subprocess.run([sys.executable, "-c", started + "\nimport pysim.jit"],
+                       capture_output=True, text=True, env=env,
+                       cwd=Path(__file__).resolve().parents[2], timeout=300)
+    assert p.returncode == 0, p.stderr
+    return p.stderr
+
+
+def test_threads_started_on_another_layer_before_import_warn():
+    """Numba's threads started before pysim's import run on the layer Numba chose then,
+    not on OpenMP (1.6-2 times slower steps on 2 threads): the import says so and how to
+    avoid it; started after the import, nothing is said."""
+    early = ("import numba\nnumba.config.THREADING_LAYER = 'workqueue'\n"
+             "numba.set_num_threads(1)")
+    err = _import_after(early)
+    assert "RuntimeWarning" in err and "'workqueue' layer" in err
+    assert "Import pysim before calling numba.set_num_threads" in err
+    assert "layer" not in _import_after("import numba")

@@ -11,7 +11,7 @@ def test_tiny_bench_writes_every_case(tmp_path):
     out = tmp_path / "bench.csv"
     rows = bench.run(out, n_spheres=300, n_rods=200, steps=20, rod_steps=10, repeats=1,
                      cores=(1,), engines=("pysim", "lammps-legacy"), scaling=(300, 310, 600),
-                     scaling_steps=5, scaling_work=2100, scaling_repeats=2, log=lambda *a: None)
+                     scaling_steps=5, scaling_work=3100, scaling_repeats=2, log=lambda *a: None)
     with open(out) as fh:
         table = list(csv.DictReader(fh))
     assert list(table[0]) == bench.FIELDS
@@ -20,9 +20,12 @@ def test_tiny_bench_writes_every_case(tmp_path):
             ("spheres_frictionless", "pysim"), ("rods_a4", "pysim"), ("rods_a4", "lammps-rigid"),
             ("scaling_spheres", "pysim"), ("scaling_rods", "pysim")} <= cases
     assert all(float(r["seconds"]) > 0 and float(r["throughput"]) > 0 for r in table)
-    # a scaling point runs scaling_work particle-steps, at least scaling_steps steps
+    # a scaling point times scaling_steps steps, repeated from the tiled state until about
+    # scaling_work particle-steps: 300 spheres twice, 600 once
     assert {(int(r["n"]), int(r["steps"])) for r in table
-            if r["case"] == "scaling_spheres"} == {(300, 7), (600, 5)}
+            if r["case"] == "scaling_spheres"} == {(300, 10), (600, 5)}
+    assert {(int(r["n"]), int(r["steps"])) for r in table
+            if r["case"] == "scaling_rods"} == {(200, 15), (400, 10), (600, 5)}
     # each scaling size is timed scaling_repeats times per core count, in rounds over
     # all sizes (a slow spell of the machine then slows one timing of each), once per
     # round even where two targets tile to it (310 spheres tile to 300; rods of 200
@@ -35,6 +38,31 @@ def test_tiny_bench_writes_every_case(tmp_path):
                                               ("rods_a4", "lammps-rigid")}
     bench.plot(rows, tmp_path / "bench.png")
     assert (tmp_path / "bench.png").stat().st_size > 1000
+
+
+def test_scaling_segments_time_the_same_steps_of_one_trajectory(tmp_path):
+    """Each segment of a scaling point starts from the state as written: the contacts at
+    the end of every segment are those after WARM_STEPS + steps steps of one run, not
+    of a run that went on."""
+    import pysim.simulation as ps
+    from pysim import State
+
+    x, u, r, length, box = bench.dense_rods(200, 4.0, 0.5)
+    path = tmp_path / "rods.npz"
+    np.savez(path, x=x, u=u, radius=r, length=length, box=box)
+    got = bench.run_pysim(path, 1, 5, True, segments=3)
+    m = bench.MODEL
+    sim = ps.Simulation(State.create(x, r, length, box, axis=u),
+                        ps.ContactModel("hooke", m["k_n"], m["gamma_n"], k_t=m["k_t"],
+                                        gamma_t=m["gamma_t"], mu=m["mu"]), dt=m["dt"])
+    seen = []
+    for _ in range(3):
+        sim.run(bench.WARM_STEPS + 5 if not seen else 5)
+        seen.append(sim.thermo().n_contacts)
+    assert got["segment_contacts"] == [seen[0]] * 3
+    assert got["seconds"] > 0
+    # the state unjams: a run that went on would have ended with other contacts
+    assert seen[1:] != seen[:1] * 2
 
 
 def test_scaling_spread_is_time_per_particle_step_over_that_near_1e4():
