@@ -46,6 +46,27 @@ def minimum_image(d, box, periodic):
 
 
 @njit
+def _longest_first(x, u, box, periodic):
+    """Copies of positions, axes, box and periodic flags with the axes reordered longest
+    first, ties in x, y, z order (the order of :func:`spatial_order`, slowest first). A
+    pair's distances are the same numbers in another order."""
+    a = np.argsort(-box, kind="mergesort")
+    n = x.shape[0]
+    xs = np.empty((n, 3))
+    us = np.empty((n, 3))
+    for i in range(n):
+        for c in range(3):
+            xs[i, c] = x[i, a[c]]
+            us[i, c] = u[i, a[c]]
+    bs = np.empty(3)
+    ps = np.empty(3, np.bool_)
+    for c in range(3):
+        bs[c] = box[a[c]]
+        ps[c] = periodic[a[c]]
+    return xs, us, bs, ps
+
+
+@njit
 def _grid(x, box, periodic, cell_min):
     """Counting sort of the particles into cells at least ``cell_min`` wide.
     Returns ``(nc (3,), cell_of (N,), start (ncell+1,), members (N,))``; the particles
@@ -251,7 +272,14 @@ def build_list(x, u, r_int, half, box, periodic, skin, row_room=ROW_ROOM, scratc
     (:func:`_forward_pairs`, one task per group of cells, into a buffer with
     ``row_room`` places per particle: ``scratch``, an int32 array, where it is large
     enough; if a task's pairs do not fit, all tasks run again with the room they
-    needed). A counting sort puts each pair in the row of its lower index."""
+    needed). A counting sort puts each pair in the row of its lower index.
+
+    The cells run in the order of :func:`spatial_order`, the longest box axis slowest
+    (:func:`_longest_first`), so that in a sorted start a cell's neighbours lie close in
+    memory. With the cells in x, y, z order instead (before session 42), a build of the
+    bench's 10^5 rods (box 24.5 x 122 x 245: the particles' order reversed) took 4.11 µs
+    per rod, now 2.37; 10^6 rods (122 x 245 x 245) 2.43 and 2.26; 10^4 rods, whose arrays
+    fit in the cache, 2.32 and 2.54 (one thread, min of 3-300; the same pairs)."""
     n = x.shape[0]
     rmax = 0.0
     rods = False
@@ -261,6 +289,7 @@ def build_list(x, u, r_int, half, box, periodic, skin, row_room=ROW_ROOM, scratc
         if half[i] > 0.0:
             rods = True
     k = CELLS_PER_RANGE if rods else 1
+    x, u, box, periodic = _longest_first(x, u, box, periodic)
     nc, cell_of, start, members = _grid(x, box, periodic, (2.0 * rmax + skin) / k)
     ncell = start.shape[0] - 1
     cb = max(1, BLOCK * ncell // max(n, 1))  # cells per task: about BLOCK particles
