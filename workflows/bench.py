@@ -481,9 +481,9 @@ def main(argv=None) -> int:
     ap.add_argument("--engines", default="pysim,lammps-legacy,lammps-granular,liggghts")
     ap.add_argument("--scaling", default="1000,10000,100000,1000000")
     ap.add_argument("--scaling-steps", type=int, default=20,
-                    help="fewest steps per scaling point")
+                    help="timed steps of a scaling segment, the same at every size")
     ap.add_argument("--scaling-work", type=float, default=2e7,
-                    help="particle-steps per scaling point (steps = work / N)")
+                    help="particle-steps per scaling point (segments = work / (N steps))")
     ap.add_argument("--scaling-repeats", type=int, default=3,
                     help="timings of each scaling point on each core count (the fastest counts)")
     ap.add_argument("--cores", default="1,2")

@@ -44,11 +44,12 @@ def test_prefetch_write_needs_a_contiguous_array():
 def _import_after(started: str) -> str:
     """The warnings (stderr) of a fresh interpreter that runs ``started`` and then
     imports pysim."""
+    import os
     import subprocess
     import sys
     from pathlib import Path
 
-    env = {k: v for k, v in __import__("os").environ.items() if k != "NUMBA_THREADING_LAYER"}
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_THREADING_LAYER"}
     p = subprocess.run([sys.executable, "-c", started + "\nimport pysim.jit"],
                        capture_output=True, text=True, env=env,
                        cwd=Path(__file__).resolve().parents[2], timeout=300)
