@@ -46,11 +46,17 @@ def minimum_image(d, box, periodic):
 
 
 @njit
+def _slowest_first(box):
+    """The box axes from the longest to the shortest, ties in x, y, z order: the order,
+    slowest first, of :func:`spatial_order`'s sort and of the list build's cells."""
+    return np.argsort(-box, kind="mergesort")
+
+
+@njit
 def _longest_first(x, u, box, periodic):
-    """Copies of positions, axes, box and periodic flags with the axes reordered longest
-    first, ties in x, y, z order (the order of :func:`spatial_order`, slowest first). A
-    pair's distances are the same numbers in another order."""
-    a = np.argsort(-box, kind="mergesort")
+    """Copies of positions, axes, box and periodic flags with the axes reordered
+    :func:`_slowest_first`. A pair's distances are the same numbers in another order."""
+    a = _slowest_first(box)
     n = x.shape[0]
     xs = np.empty((n, 3))
     us = np.empty((n, 3))
@@ -529,7 +535,7 @@ def spatial_order(x, box, cell: float = 1.0) -> np.ndarray:
     box = np.asarray(box, dtype=np.float64)
     nc = np.maximum((box // cell).astype(np.int64), 1)
     c = np.clip((x / np.where(box > 0, box, 1.0) * nc).astype(np.int64), 0, nc - 1)
-    a = np.argsort(-box, kind="stable")  # slowest axis first; ties keep x, y, z
+    a = _slowest_first(box)
     key = (c[:, a[0]] * nc[a[1]] + c[:, a[1]]) * nc[a[2]] + c[:, a[2]]
     return np.argsort(key, kind="stable")
 

@@ -233,7 +233,7 @@ def _pysim_child(state: str, steps: int, friction: bool, segments: int = 1):
         gc.collect()
     peak = _memory("VmHWM")
     print(json.dumps({"seconds": sec, "peak_rss": peak, "base_rss": base,
-                      "contacts": contacts[-1], "segment_contacts": contacts,
+                      "segment_contacts": contacts,
                       "rebuilds": rebuilds}))
 
 
