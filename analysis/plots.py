@@ -645,3 +645,56 @@ def order_scaling(curves, table, out):
     fig.suptitle("orientational order of the compressed packings: disorder gives "
                  r"$S_n \sim 1/\sqrt{N}$", fontsize=10)
     _save(fig, out)
+
+
+def against_papers(table, out, max_panels: int = 24):
+    """The value rows of ``vs_paper.csv`` with a run behind them, one panel per paper and
+    observable: the paper's values (black, error bars: their uncertainty) and each
+    engine's seed means (error bars: standard errors) against the parameter that varies
+    among the panel's rows (else the row ids); markers filled where the verdict is
+    ``agrees``, open otherwise."""
+    import pandas as pd
+
+    point = ["alpha", "d", "sigma", "e_n", "Gamma", "bo_g", "layer", "tap"]
+    rows = table[(table["kind"] == "value")]
+    ran = rows[rows["engine"].fillna("").astype(str) != ""]
+    keys = sorted({(p, o) for p, o in zip(ran["paper"], ran["observable"])})[:max_panels]
+    if not keys:
+        message_figure(out, "No run matches a published value yet\n(vs_paper.csv: every "
+                            "row 'not run').")
+        return
+    ncol = min(3, len(keys))
+    nrow = int(np.ceil(len(keys) / ncol))
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.2 * nrow), squeeze=False)
+    for ax, (paper, obs) in zip(axes.flat, keys):
+        sub = rows[(rows["paper"] == paper) & (rows["observable"] == obs)]
+        varying = [c for c in point if pd.to_numeric(sub[c], errors="coerce").nunique() > 1]
+        if varying:
+            xcol = varying[0]
+            x = pd.to_numeric(sub[xcol], errors="coerce").to_numpy(float)
+            ax.set_xlabel(xcol)
+        else:
+            ids = list(dict.fromkeys(sub["id"]))
+            x = np.array([ids.index(i) for i in sub["id"]], float)
+            ax.set_xticks(range(len(ids)), ids, rotation=30, fontsize=7)
+        ref = sub.drop_duplicates("id")
+        xr = x[[list(sub.index).index(i) for i in ref.index]]
+        ax.errorbar(xr, ref["paper_value"], yerr=ref["paper_uncertainty"].fillna(0), fmt="s",
+                    color="k", ms=5, capsize=3, label="paper")
+        for engine, g in sub.groupby("engine"):
+            if not str(engine):
+                continue
+            xe = x[[list(sub.index).index(i) for i in g.index]]
+            agree = (g["verdict"] == "agrees").to_numpy()
+            color = ENGINE_COLORS.get(engine, "tab:gray")
+            ax.errorbar(xe, g["ours"], yerr=g["ours_uncertainty"].fillna(0), fmt="none",
+                        ecolor=color, capsize=2)
+            ax.scatter(xe[agree], g["ours"][agree], color=color, zorder=3, label=engine)
+            ax.scatter(xe[~agree], g["ours"][~agree], facecolors="none", edgecolors=color,
+                       zorder=3, label=f"{engine} (not agreeing)" if (~agree).any() else None)
+        ax.set_title(f"{paper}: {obs}", fontsize=9)
+        ax.legend(fontsize=6)
+    for ax in list(axes.flat)[len(keys):]:
+        ax.set_visible(False)
+    fig.tight_layout()
+    _save(fig, out)

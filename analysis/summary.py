@@ -312,6 +312,29 @@ def cycle_rows(cycle: pd.DataFrame, n_grains: int) -> list[tuple[str, float, flo
             ("cycle_bins", float(len(cycle)), nan)]
 
 
+#: tap counts at which the tapping paper states its densities and angles (and its snapshots)
+TAP_MARKS = (10, 100, 300, 900, 1000, 2000, 4134)
+
+
+def tap_mark_rows(curves: pd.DataFrame, fraction: float = LATE_FRACTION) -> list[tuple]:
+    """The state at each tap count of :data:`TAP_MARKS` a run reaches: ``phi_tap<k>``,
+    ``angle_tap<k>`` and ``angle_tap<k>_layer<j>``, means over the frames of the taps in
+    ``(k (1 - fraction), k]`` (at least tap ``k``'s own frames), as :func:`late_window`
+    averages the end of a run."""
+    rows = []
+    for k in TAP_MARKS:
+        if curves.tap.max() < k - 1e-9:
+            break
+        w = curves[(curves.tap > k - max(1.0, fraction * k) + 1e-9) & (curves.tap <= k + 1e-9)]
+        rows += [(f"phi_tap{k}", float(w.phi.mean()), np.nan),
+                 (f"angle_tap{k}", float(w.angle.mean()), np.nan)]
+        j = 1
+        while f"angle_layer{j}" in w:
+            rows.append((f"angle_tap{k}_layer{j}", float(w[f"angle_layer{j}"].mean()), np.nan))
+            j += 1
+    return rows
+
+
 def analyse_tapping(run_dir, **plan):
     """Observables and per-frame curves (:func:`tap_curves`, keyword arguments ``plan``) of
     a tapping run: ``phi_settled`` and ``angle_settled`` (the packing before the first
@@ -322,7 +345,8 @@ def analyse_tapping(run_dir, **plan):
     means over the frames of the last eighth of the taps (:func:`late_window`), with the
     standard deviation over those frames as the uncertainty of the first two (a spread
     over taps, not a seed-to-seed error); and how the late taps shake the bed, from the
-    thermo rows of the same window (:func:`tap_cycle`, :func:`cycle_rows`)."""
+    thermo rows of the same window (:func:`tap_cycle`, :func:`cycle_rows`); the state at
+    the paper's tap counts (:func:`tap_mark_rows`)."""
     run = RunData(run_dir)
     curves = tap_curves(run, **plan)
     if not len(curves):
@@ -348,6 +372,7 @@ def analyse_tapping(run_dir, **plan):
         rows.append((f"angle_tapped_layer{k}", float(last_tap[f"angle_layer{k}"].mean()), np.nan))
         rows.append((f"angle_late_layer{k}", float(late[f"angle_layer{k}"].mean()), np.nan))
         k += 1
+    rows += tap_mark_rows(curves)
     thermo = run.thermo
     cycle = tap_cycle(thermo, plan["start_step"], plan["dt"], plan["period"],
                       first_tap=float(late.tap.min()) - 1.0)

@@ -61,3 +61,25 @@ rule summary:
         "{PYTHON} -m workflows.scripts.summarize --summary {output.summary}"
         " --comparison {output.comparison} --failures {output.failures}"
         " --records {input.records} --observables {input.observables} 2> {log}"
+
+
+rule vs_paper:
+    input:
+        summary=f"{RESULTS}/summary.csv",
+        references=sorted(glob.glob(os.path.join(REFERENCES, "*.csv"))),
+    output:
+        table=report(
+            f"{RESULTS}/vs_paper.csv",
+            caption="../report/vs_paper.rst",
+            category="Against the papers",
+        ),
+        figure=report(
+            f"{RESULTS}/figures/vs_paper.png",
+            caption="../report/vs_paper_figure.rst",
+            category="Against the papers",
+        ),
+    log:
+        f"{RESULTS}/vs_paper.log",
+    shell:
+        "{PYTHON} -m workflows.scripts.vs_paper --references {REFERENCES}"
+        " --results {RESULTS} --out {output.table} --figure {output.figure} 2> {log}"

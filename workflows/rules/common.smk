@@ -1,6 +1,8 @@
 # Configuration validation, the run table and the final targets.
+import glob
 import math
 import json
+import os
 import sys
 
 from workflows.case import ConfigError, runs as expand_runs, validate_config, varying_parameters
@@ -15,6 +17,8 @@ except ConfigError as exc:
     sys.exit(2)
 
 RESULTS = CFG["results"]
+#: the papers' published values (references/README.md)
+REFERENCES = os.path.join(workflow.basedir, "references")
 _skipped = []
 RUNS = expand_runs(CFG, _skipped)
 for _msg in _skipped:
@@ -73,7 +77,8 @@ def deposit_trend(study):
 
 
 def get_final_output():
-    out = [f"{RESULTS}/summary.csv", f"{RESULTS}/comparison.csv", f"{RESULTS}/failures.csv"]
+    out = [f"{RESULTS}/summary.csv", f"{RESULTS}/comparison.csv", f"{RESULTS}/failures.csv",
+           f"{RESULTS}/vs_paper.csv"]
     if any(r.engine.startswith("lammps") and CFG["_cases"][(r.study, r.variant, r.seed)]["particles"]
            ["aspect_ratio"] > 0 for r in RUNS):
         out.append(f"{RESULTS}/body_check/body_check.png")  # rods on LAMMPS: check its bodies

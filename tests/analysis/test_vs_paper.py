@@ -1,0 +1,188 @@
+"""The matching of published values against runs, on small made-up tables."""
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from analysis.vs_paper import (REFERENCE_COLUMNS, ReferenceError, match, parse_conditions,
+                               read_references)
+
+
+def ref(**kw):
+    row = {c: np.nan for c in REFERENCE_COLUMNS}
+    row.update(id="p-01", paper="p", where="Table 1", study="jamming_2d", kind="value",
+               observable="phi_j", alpha=1.0, value=0.88, uncertainty=0.002,
+               uncertainty_kind="stated", conditions="dimension=2; n=1024", claim="x")
+    row.update(kw)
+    return row
+
+
+def refs(*rows):
+    return pd.DataFrame(list(rows), columns=REFERENCE_COLUMNS)
+
+
+def runs_and_results(values, alpha=1.0, n=1024, engine="pysim", observable="phi_j",
+                     case="a1", **terms):
+    runs = pd.DataFrame([{"study": "jamming_2d_paper", "case": case, "engine": engine,
+                          "seed": s, "family": "jamming_2d", "alpha": alpha, "d": 1 + alpha,
+                          "sigma": np.nan, "e_n": np.nan, "Gamma": np.nan, "bo_g": np.nan,
+                          "n": float(n), "dimension": 2.0, **terms}
+                         for s in range(1, len(values) + 1)])
+    results = pd.DataFrame([{"study": "jamming_2d_paper", "case": case, "engine": engine,
+                             "seed": s, "observable": observable, "value": v,
+                             "uncertainty": np.nan}
+                            for s, v in enumerate(values, start=1)])
+    return runs, results
+
+
+def test_agrees_within_the_combined_uncertainty():
+    runs, res = runs_and_results([0.8795, 0.8805, 0.8800])
+    out = match(refs(ref()), runs, res)
+    assert list(out.verdict) == ["agrees"]
+    r = out.iloc[0]
+    assert r.n_seeds == 3 and math.isclose(r.ours, 0.88)
+    assert math.isclose(r.ours_uncertainty, 0.0005 / math.sqrt(3), rel_tol=1e-9)
+    assert abs(r.diff_sigma) < 1e-9
+
+
+def test_a_value_outside_the_uncertainty_differs():
+    runs, res = runs_and_results([0.894, 0.895])
+    r = match(refs(ref()), runs, res).iloc[0]
+    assert r.verdict == "differs"
+    # (0.8945 - 0.88) / hypot(0.002, 0.0005)
+    assert math.isclose(r.diff_sigma, 0.0145 / math.hypot(0.002, 0.0005), rel_tol=1e-9)
+
+
+def test_a_condition_mismatch_says_which_and_keeps_our_value():
+    runs, res = runs_and_results([0.88, 0.88], n=512)
+    r = match(refs(ref()), runs, res).iloc[0]
+    assert r.verdict.startswith("conditions differ: ")
+    assert "n (ours 512, paper 1024)" in r.verdict
+    assert math.isclose(r.ours, 0.88)
+
+
+def test_a_missing_run_is_not_run():
+    runs, res = runs_and_results([0.88], alpha=4.0)
+    out = match(refs(ref()), runs, res)
+    assert list(out.verdict) == ["not run"] and out.iloc[0].engine == ""
+    # no runs at all
+    out = match(refs(ref()), pd.DataFrame(), pd.DataFrame())
+    assert list(out.verdict) == ["not run"]
+
+
+def test_an_observable_no_run_reports_is_not_run_with_a_note():
+    runs, res = runs_and_results([0.88])
+    r = match(refs(ref(observable="flat_fraction")), runs, res).iloc[0]
+    assert r.verdict == "not run" and "flat_fraction" in r.note
+
+
+def test_inequality_conditions_and_unchecked_keys():
+    runs, res = runs_and_results([0.88, 0.88], rate=1e-8)
+    r = match(refs(ref(conditions="dimension=2; rate<=1e-9; side_contacts=two_bonds")),
+              runs, res).iloc[0]
+    assert "rate (ours 1e-08, paper <=1e-09)" in r.verdict
+    runs, res = runs_and_results([0.88, 0.88], rate=1e-10)
+    r = match(refs(ref(conditions="dimension=2; rate<=1e-9; law=harmonic")), runs, res).iloc[0]
+    assert r.verdict == "agrees" and "unchecked: law" in r.note
+
+
+def test_observable_conditions_separate_contact_counts():
+    # the paper counts side-to-side contacts twice: z_j (once) is the wrong observable
+    runs, res = runs_and_results([4.4, 4.4], observable="z_j")
+    r = match(refs(ref(observable="z_j", value=4.43, uncertainty=0.03,
+                       conditions="side_contacts=two_bonds")), runs, res).iloc[0]
+    assert "side_contacts (ours one, paper two_bonds)" in r.verdict
+
+
+def test_a_band_agrees_inside_it_only():
+    row = ref(study="tapping", observable="angle_late", layer=2, value=85.0, uncertainty=5.0,
+              uncertainty_kind="band", conditions="")
+    runs, res = runs_and_results([81.0, 82.0], observable="angle_late_layer2")
+    runs["family"] = "tapping"
+    assert match(refs(row), runs, res).iloc[0].verdict == "agrees"
+    runs, res = runs_and_results([70.0, 71.0], observable="angle_late_layer2")
+    runs["family"] = "tapping"
+    assert match(refs(row), runs, res).iloc[0].verdict == "differs"
+
+
+def trend_data(means, spread=0.001):
+    parts = [runs_and_results([m - spread, m + spread], alpha=a, case=f"a{a}")
+             for a, m in means.items()]
+    return (pd.concat([p[0] for p in parts], ignore_index=True),
+            pd.concat([p[1] for p in parts], ignore_index=True))
+
+
+def trend(expect, over="0.5;1;4"):
+    return ref(kind="trend", alpha=np.nan, value=np.nan, uncertainty=np.nan,
+               uncertainty_kind=np.nan, vary="alpha", over=over, expect=expect)
+
+
+def test_trends():
+    runs, res = trend_data({0.5: 0.80, 1.0: 0.85, 4.0: 0.90})
+    assert match(refs(trend("increasing")), runs, res).iloc[0].verdict == "agrees"
+    assert match(refs(trend("decreasing")), runs, res).iloc[0].verdict == "differs"
+    assert match(refs(trend("constant")), runs, res).iloc[0].verdict == "differs"
+    runs, res = trend_data({0.5: 0.85, 1.0: 0.85, 4.0: 0.85})
+    assert match(refs(trend("constant")), runs, res).iloc[0].verdict == "agrees"
+    assert match(refs(trend("increasing")), runs, res).iloc[0].verdict == "unresolved"
+    # a point of the trend that was never run
+    r = match(refs(trend("increasing", over="0.5;1;8")), runs, res).iloc[0]
+    assert r.verdict == "not run" and "alpha 8" in r.note
+
+
+def test_conditions_parse_and_reject_junk():
+    assert parse_conditions("dimension=2; rate<=1e-9;law=harmonic") == [
+        ("dimension", "=", 2.0), ("rate", "<=", 1e-9), ("law", "=", "harmonic")]
+    assert parse_conditions(np.nan) == []
+    with pytest.raises(ReferenceError, match="not key=value"):
+        parse_conditions("dimension two")
+
+
+def test_reference_tables_are_checked(tmp_path):
+    good = refs(ref(), ref(id="p-02", kind="trend", value=np.nan, uncertainty=np.nan,
+                           uncertainty_kind=np.nan, vary="alpha", over="1;2",
+                           expect="increasing"))
+    good.to_csv(tmp_path / "p.csv", index=False)
+    assert len(read_references(tmp_path)) == 2
+    refs(ref(), ref()).to_csv(tmp_path / "p.csv", index=False)
+    with pytest.raises(ReferenceError, match="duplicated reference id 'p-01'"):
+        read_references(tmp_path)
+    refs(ref(kind="guess")).to_csv(tmp_path / "p.csv", index=False)
+    with pytest.raises(ReferenceError, match="kind 'guess'"):
+        read_references(tmp_path)
+    refs(ref(uncertainty_kind="about")).to_csv(tmp_path / "p.csv", index=False)
+    with pytest.raises(ReferenceError, match="uncertainty_kind 'about'"):
+        read_references(tmp_path)
+    refs(ref(id="p-03", kind="trend", vary="colour", over="1;2",
+             expect="up")).to_csv(tmp_path / "p.csv", index=False)
+    with pytest.raises(ReferenceError, match="vary 'colour'"):
+        read_references(tmp_path)
+
+
+def test_trends_along_the_layers_and_the_taps_of_one_run():
+    row = ref(kind="trend", study="tapping", observable="angle_late", value=np.nan,
+              uncertainty=np.nan, uncertainty_kind=np.nan, conditions="", vary="layer",
+              over="1;2;3", expect="increasing")
+    parts = [runs_and_results([m - 0.5, m + 0.5], observable=f"angle_late_layer{k}")
+             for k, m in ((1, 40.0), (2, 50.0), (3, 60.0))]
+    runs = parts[0][0].assign(family="tapping")
+    res = pd.concat([p[1] for p in parts], ignore_index=True)
+    r = match(refs(row), runs, res).iloc[0]
+    assert r.verdict == "agrees" and r.ours == "40;50;60"
+    assert r.observable == "angle_late_layer1 ... angle_late_layer3"
+    # along the taps: angle_late at tap k is the observable angle_tap<k>; tap 1000 missing
+    row.update(vary="tap", over="10;100;1000", layer=2)
+    parts = [runs_and_results([m - 0.5, m + 0.5], observable=f"angle_tap{k}_layer2")
+             for k, m in ((10, 40.0), (100, 50.0))]
+    res = pd.concat([p[1] for p in parts], ignore_index=True)
+    r = match(refs(row), runs, res).iloc[0]
+    assert r.verdict == "not run" and "tap 1000" in r.note
+
+
+def test_one_seed_has_no_uncertainty_of_ours():
+    runs, res = runs_and_results([0.8801])
+    res["uncertainty"] = 0.01  # a spread over frames, not an error of the mean
+    r = match(refs(ref()), runs, res).iloc[0]
+    assert r.n_seeds == 1 and np.isnan(r.ours_uncertainty) and "one seed" in r.note
+    assert r.verdict == "agrees"

@@ -1,0 +1,133 @@
+"""vs_paper.csv from results folders, the study notebooks' verdict blocks, and the
+repository's reference tables."""
+from pathlib import Path
+
+import pandas as pd
+import yaml
+
+from analysis.vs_paper import read_references
+from workflows.scripts.vs_paper import main
+from workflows.vs_paper import (BLOCK_BEGIN, BLOCK_END, STUDY_DOCS, case_terms, family,
+                                markdown_table, with_block)
+
+ROOT = Path(__file__).resolve().parents[2]
+
+CASE_2D = {"particles": {"n": 1024, "dimension": 2, "aspect_ratio": 1.0,
+                         "diameter": {"distribution": "bidisperse", "mean": 1.0, "ratio": 1.4}},
+           "contact": {"law": "harmonic", "friction": 0.0},
+           "protocol": {"name": "jammed", "rate": 1e-6}}
+CASE_TAP = {"particles": {"n": 1000, "aspect_ratio": 4.0,
+                          "diameter": {"distribution": "mono", "mean": 0.523e-3}},
+            "contact": {"law": "hooke", "restitution": 0.4, "friction": 0.5},
+            "container": {"shape": "cylinder", "diameter": 8e-3},
+            "protocol": {"name": "tapping", "intensity": 2.0, "taps": 1000}}
+
+
+def test_case_terms():
+    t = case_terms(CASE_2D)
+    assert t["family"] == "jamming_2d" and t["alpha"] == 1.0 and t["d"] == 2.0
+    assert t["bidisperse"] == 1.4 and t["container"] == "periodic" and t["rate"] == 1e-6
+    t = case_terms(CASE_TAP)
+    assert t["family"] == "tapping" and t["e_n"] == 0.4 and t["Gamma"] == 2.0
+    assert t["tap"] == 1000 and t["sigma"] == 0.0 and t["container"] == "cylinder"
+    dep = {"particles": {"n": 300, "dimension": 2, "aspect_ratio": 9.0,
+                         "diameter": {"mean": 1.0}},
+           "contact": {"law": "hertz", "bond_number": 1e3},
+           "container": {"shape": "box", "width": 200.0}, "protocol": {"name": "deposit"}}
+    t = case_terms(dep)
+    assert family(dep) == "deposition" and t["bo_g"] == 1e3 and t["d"] == 10.0
+    assert t["width_over_length"] == 20.0 and t["feed"] == "column"
+
+
+def _results(tmp_path, n=1000, taps=2000, values=(0.75, 0.76)):
+    root = tmp_path / "results"
+    case = {**CASE_TAP, "protocol": {**CASE_TAP["protocol"], "taps": taps},
+            "particles": {**CASE_TAP["particles"], "n": n}}
+    rows = []
+    for seed, v in enumerate(values, start=1):
+        d = root / "tapping_x" / "an6" / f"seed{seed}"
+        d.mkdir(parents=True)
+        (d / "case.yaml").write_text(yaml.safe_dump(case))
+        rows.append({"study": "tapping_x", "case": "an6", "engine": "pysim", "seed": seed,
+                     "observable": "phi_late", "value": v, "uncertainty": float("nan")})
+    pd.DataFrame(rows).to_csv(root / "summary.csv", index=False)
+    return root
+
+
+def _refs(tmp_path):
+    folder = tmp_path / "refs"
+    folder.mkdir()
+    cols = ["id", "paper", "where", "study", "kind", "observable", "alpha", "d", "sigma",
+            "e_n", "Gamma", "bo_g", "layer", "tap", "n", "value", "uncertainty",
+            "uncertainty_kind", "conditions", "vary", "over", "expect", "claim"]
+    row = dict.fromkeys(cols, "")
+    row.update(id="t-01", paper="t", where="Sec. 5", study="tapping", kind="value",
+               observable="phi_late", alpha=4, e_n=0.4, Gamma=2, tap=2000, n=1000,
+               value=0.75, uncertainty=0.01, uncertainty_kind="figure",
+               conditions="dimension=3;protocol=tapping", claim="density after 2000 taps")
+    other = {**row, "id": "t-02", "Gamma": 1.5}
+    pd.DataFrame([row, other], columns=cols).to_csv(folder / "t.csv", index=False)
+    return folder
+
+
+def test_script_writes_the_table_and_the_notebook_block(tmp_path):
+    refs = _refs(tmp_path)
+    results = _results(tmp_path)
+    docs = tmp_path / "docs"
+    docs.mkdir()
+    (docs / "tapping.md").write_text("# Tapping\n\nNotes.\n")
+    out = tmp_path / "vs_paper.csv"
+    assert main(["--references", str(refs), "--results", str(results), "--out", str(out),
+                 "--docs", str(docs), "--figure", str(tmp_path / "f.png")]) == 0
+    table = pd.read_csv(out)
+    assert list(table.verdict) == ["agrees", "not run"]
+    assert table.iloc[0].n_seeds == 2 and abs(table.iloc[0].ours - 0.755) < 1e-12
+    assert (tmp_path / "f.png").stat().st_size > 0
+    text = (docs / "tapping.md").read_text()
+    assert text.startswith("# Tapping\n\n" + BLOCK_BEGIN) and text.count(BLOCK_END) == 1
+    # a second run replaces the block, never stacks a second one
+    assert main(["--references", str(refs), "--results", str(results),
+                 "--docs", str(docs)]) == 0
+    assert (docs / "tapping.md").read_text() == text
+
+
+def test_a_run_at_other_conditions(tmp_path):
+    refs = _refs(tmp_path)
+    results = _results(tmp_path, taps=400)
+    out = tmp_path / "vs_paper.csv"
+    assert main(["--references", str(refs), "--results", str(results), "--out", str(out)]) == 0
+    v = pd.read_csv(out).verdict.iloc[0]
+    assert v == "conditions differ: tap (ours 400, paper 2000)"
+
+
+def test_a_bad_reference_table_is_one_line(tmp_path, capsys):
+    folder = tmp_path / "refs"
+    folder.mkdir()
+    (folder / "x.csv").write_text("id,paper\nx-01,x\n")
+    assert main(["--references", str(folder), "--results", str(tmp_path),
+                 "--out", str(tmp_path / "o.csv")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and "missing columns" in err and "\n" not in err
+
+
+def test_with_block_inserts_after_the_title_once():
+    block = f"{BLOCK_BEGIN}\nA\n{BLOCK_END}"
+    text = with_block("# T\n\nbody\n", block)
+    assert text == f"# T\n\n{block}\n\nbody\n"
+    assert with_block(text, block.replace("A", "B")) == text.replace("\nA\n", "\nB\n")
+
+
+def test_the_repository_references_load():
+    refs = read_references(ROOT / "references")
+    assert len(refs) >= 40
+    assert set(refs["study"]) <= set(STUDY_DOCS)
+    assert refs["where"].fillna("").str.strip().ne("").all()
+
+
+def test_the_notebooks_open_with_the_committed_table():
+    """docs/studies/*.md carry the verdict block generated from docs/studies/vs_paper.csv:
+    regenerate it with workflows.scripts.vs_paper --docs when the runs change."""
+    table = pd.read_csv(ROOT / "docs" / "studies" / "vs_paper.csv")
+    for study, name in STUDY_DOCS.items():
+        text = (ROOT / "docs" / "studies" / name).read_text()
+        assert markdown_table(table, study) in text, name
