@@ -254,7 +254,8 @@ def _seed_groups(runs):
     return out
 
 
-def tapping_curves(runs, out, phi_max=None, n_layers: int = 4, layer_label: str = ""):
+def tapping_curves(runs, out, phi_max=None, n_layers: int = 4, layer_label: str = "",
+                   paper=None):
     """Tapping: volumetric density (raw, thin; moving average over one oscillation,
     thick) and mean angle between spines and the base versus ``1 + tap number`` on a
     logarithmic axis, globally and per layer; all runs overlaid. Runs of one ``group``
@@ -264,7 +265,10 @@ def tapping_curves(runs, out, phi_max=None, n_layers: int = 4, layer_label: str 
     ``runs``: dicts with ``label``, ``engine``, ``index`` (run number for the colour),
     ``curves`` (:func:`analysis.summary.tap_curves`) and optionally ``group`` and
     ``group_label``. ``phi_max``: ``{label: value}`` of aligned-packing limits drawn as
-    reference lines on the density panels.
+    reference lines on the density panels. ``paper``: the paper's values to overlay, dicts
+    with ``index`` (the colour of their runs), ``quantity`` (``phi`` or ``angle``),
+    ``layer`` (0 for the whole bed), ``tap`` (``nan`` for a late state, drawn as a band
+    from tap 1000 on), ``value`` and ``uncertainty``.
     """
     phi_max = phi_max or {}
     fig, axes = plt.subplots(2, n_layers + 1, figsize=(3.3 * (n_layers + 1), 6.4),
@@ -290,6 +294,16 @@ def tapping_curves(runs, out, phi_max=None, n_layers: int = 4, layer_label: str 
                 if f"{col}_avg" in cv:
                     axes[row, k].plot(x, cv[f"{col}_avg"], color=color, lw=1.4, ls=ls,
                                       label=label if (row, k) == (0, 0) else None)
+    for i, ref in enumerate(paper or []):
+        ax = axes[0 if ref["quantity"] == "phi" else 1, int(ref["layer"])]
+        color = cmap(ref["index"] % 10)
+        label = "paper" if i == 0 else None
+        if np.isfinite(ref["tap"]):
+            ax.errorbar([1.0 + ref["tap"]], [ref["value"]], yerr=[ref["uncertainty"]], fmt="s",
+                        color=color, mec="k", ms=6, capsize=3, zorder=5, label=label)
+        else:
+            ax.axhspan(ref["value"] - ref["uncertainty"], ref["value"] + ref["uncertainty"],
+                       xmin=0.75, color=color, alpha=0.12, hatch="//", lw=0, label=label)
     axes[0, 0].set_title("filled part of the cylinder", fontsize=9)
     for k in range(n_layers):
         axes[0, k + 1].set_title(f"layer {k + 1} {layer_label}".strip(), fontsize=9)
@@ -314,7 +328,9 @@ def tapping_curves(runs, out, phi_max=None, n_layers: int = 4, layer_label: str 
     axes[0, 0].legend(fontsize=6, loc="lower right")
     fig.suptitle("tapping: thin lines raw frames, thick the moving average over one oscillation "
                  "(several seeds: their mean, the band between the lowest and highest); "
-                 "solid pysim, dashed LAMMPS, dotted LIGGGHTS", fontsize=9)
+                 "solid pysim, dashed LAMMPS, dotted LIGGGHTS"
+                 + ("; squares and hatched bands: the paper's values (late state: bands)"
+                    if paper else ""), fontsize=9)
     fig.tight_layout()
     _save(fig, out)
 

@@ -67,6 +67,22 @@ def case_terms(case: dict) -> dict:
     }
 
 
+def reference_rows(case: dict, references, kind: str = "value") -> pd.DataFrame:
+    """The reference rows (``references``: a folder or a table from
+    :func:`analysis.vs_paper.read_references`) at a run's point: its study family, and
+    every point parameter a row gives equal to the case's; for figures that overlay the
+    paper's values on a run's curves."""
+    refs = references if isinstance(references, pd.DataFrame) else read_references(references)
+    terms = case_terms(case)
+    sel = (refs["study"] == terms["family"]) & (refs["kind"] == kind)
+    for p in POINT:
+        given = pd.to_numeric(refs[p], errors="coerce")
+        same = np.isclose(given.fillna(np.inf), terms[p], rtol=1e-3) if np.isfinite(terms[p]) \
+            else np.zeros(len(refs), bool)
+        sel &= given.isna() | same
+    return refs[sel]
+
+
 def run_table(results_dirs) -> tuple[pd.DataFrame, pd.DataFrame]:
     """``(runs, results)`` of every ``summary.csv`` under ``results_dirs``: one run row per
     ``study, case, engine, seed`` with :func:`case_terms` of its ``case.yaml``

@@ -131,3 +131,17 @@ def test_the_notebooks_open_with_the_committed_table():
     for study, name in STUDY_DOCS.items():
         text = (ROOT / "docs" / "studies" / name).read_text()
         assert markdown_table(table, study) in text, name
+
+
+def test_reference_rows_at_a_runs_point():
+    """an6 (e_n 0.4, Gamma 2, alpha 4): its own bands and the density at 2000 taps, no
+    other set's rows."""
+    from workflows.vs_paper import reference_rows
+
+    rows = reference_rows(CASE_TAP, ROOT / "references")
+    assert len(rows) and set(rows["study"]) == {"tapping"}
+    assert (pd.to_numeric(rows["e_n"]).fillna(0.4) == 0.4).all()
+    assert (pd.to_numeric(rows["Gamma"]).fillna(2.0) == 2.0).all()
+    bands = rows[(rows["observable"] == "angle_late") & (rows["uncertainty_kind"] == "band")]
+    assert sorted(bands["layer"].dropna().astype(int)) == [2, 3]
+    assert ((rows["observable"] == "phi_late") & (rows["tap"] == 2000)).any()

@@ -17,6 +17,8 @@ from analysis.io import read_particle_frames
 from pysim.io import atomic_write_text
 from workflows.case import GT_PER_GN, KT_PER_KN, ConfigError, load_case
 from workflows.runner import ok_runs
+from workflows.scripts.vs_paper import REFERENCES
+from workflows.vs_paper import reference_rows
 
 
 def curves_figure(run_dirs, out: Path) -> int:
@@ -36,8 +38,31 @@ def curves_figure(run_dirs, out: Path) -> int:
     thickness = load_case(next(iter(ok_runs(run_dirs))).parent / "case.yaml")["container"]
     plots.tapping_curves(runs, out, phi_max=limits,
                          layer_label=f"({thickness['diameter'] / 2 * 1e3:g} mm thick)"
-                         if thickness["diameter"] < 0.1 else "")
+                         if thickness["diameter"] < 0.1 else "",
+                         paper=paper_overlay(run_dirs, variants))
     return 0
+
+
+def paper_overlay(run_dirs, variants) -> list[dict]:
+    """The tapping paper's densities and angles at each variant's parameters
+    (``references/``), for :func:`analysis.plots.tapping_curves`."""
+    out = []
+    seen = set()
+    for d in ok_runs(run_dirs):
+        variant = d.parent.parent.name
+        if variant in seen:
+            continue
+        seen.add(variant)
+        rows = reference_rows(load_case(d.parent / "case.yaml"), REFERENCES)
+        for r in rows.itertuples():
+            quantity = {"phi_late": "phi", "angle_late": "angle"}.get(r.observable)
+            if quantity is None:
+                continue
+            layer = 0 if pd.isna(r.layer) else int(r.layer)
+            out.append({"index": variants.index(variant), "quantity": quantity,
+                        "layer": layer, "tap": float(r.tap), "value": float(r.value),
+                        "uncertainty": float(r.uncertainty)})
+    return out
 
 
 #: what the sets figure and table show: settled and late (last eighth of the taps) state
