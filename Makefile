@@ -44,7 +44,8 @@ run: setup
 	$(PY) -m workflows.scripts.unlock_if_idle --configfile $(CONFIG)
 	$(VENV)/bin/snakemake --cores $(CORES) --configfile $(CONFIG) --keep-going --rerun-incomplete
 	$(VENV)/bin/snakemake --cores 1 --configfile $(CONFIG) --report $(RESULTS)/report.html
-	@echo "results: $(RESULTS)/summary.csv $(RESULTS)/comparison.csv $(RESULTS)/report.html"
+	@$(PY) -m workflows.scripts.landing --results $(RESULTS) --print
+	@echo "results: $(RESULTS)/summary.csv $(RESULTS)/comparison.csv $(RESULTS)/vs_paper.csv $(RESULTS)/report.html"
 
 # pause the pipeline running here (what Ctrl-C does); 'make run' resumes it
 stop:

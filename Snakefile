@@ -12,6 +12,9 @@ if not config:
     configfile: "workflows/config/quick.yaml"
 
 
+report: "workflows/report/workflow.rst"
+
+
 include: "workflows/rules/common.smk"
 include: "workflows/rules/init.smk"
 include: "workflows/rules/engines.smk"

@@ -714,3 +714,30 @@ def against_papers(table, out, max_panels: int = 24):
         ax.set_visible(False)
     fig.tight_layout()
     _save(fig, out)
+
+
+def engine_differences(cmp, out, max_rows: int = 60):
+    """Every engine pair of ``comparison.csv`` as its difference in units of its
+    tolerance (error bars: two Welch standard errors), against the tolerance band
+    ``[-1, 1]``; coloured by verdict."""
+    colors = {"agree": "tab:green", "DIFFER": "tab:red", "inconclusive": "tab:orange",
+              "n/a": "tab:gray"}
+    rows = cmp[np.isfinite(cmp["difference"].astype(float))].head(max_rows)
+    if not len(rows):
+        message_figure(out, "No engine pair to compare\n(one engine per case, or no values).")
+        return
+    fig, ax = plt.subplots(figsize=(7.5, 0.9 + 0.24 * len(rows)))
+    y = np.arange(len(rows))[::-1]
+    x = rows["difference"].to_numpy(float) / rows["tolerance"].to_numpy(float)
+    err = 2.0 * rows["se"].to_numpy(float) / rows["tolerance"].to_numpy(float)
+    ax.axvspan(-1, 1, color="tab:green", alpha=0.1, lw=0, label="within the tolerance")
+    ax.axvline(0, color="k", lw=0.6)
+    for yi, xi, ei, v in zip(y, x, err, rows["verdict"]):
+        ax.errorbar([xi], [yi], xerr=[ei] if np.isfinite(ei) else None, fmt="o",
+                    color=colors.get(v, "k"), ms=4, capsize=2)
+    ax.set_yticks(y, [f"{r.study}/{r.case} {r.observable}: {r.engine_b} - {r.engine_a}"
+                      for r in rows.itertuples()], fontsize=6)
+    ax.set_xlabel("difference / tolerance (green: agree, red: DIFFER, orange: inconclusive)")
+    ax.legend(fontsize=6, loc="lower right")
+    fig.tight_layout()
+    _save(fig, out)

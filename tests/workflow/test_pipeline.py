@@ -52,7 +52,7 @@ def test_pipeline_end_to_end(tmp_path):
     assert len(phi_j) == 2 * len(engines)
     assert phi_j.value.between(0.58, 0.68).all()
     cmp = pd.read_csv(results / "comparison.csv")
-    assert set(cmp.verdict) <= {"agree", "DIFFER", "n/a"} and len(cmp) > 0
+    assert set(cmp.verdict) <= {"agree", "DIFFER", "inconclusive", "n/a"} and len(cmp) > 0
     for variant in ("slow", "fast"):
         for kind in ("pressure", "contacts", "phi_j"):
             assert (results / "sphere_jamming" / "figures" / f"{variant}.{kind}.png").stat().st_size > 1000
@@ -60,6 +60,12 @@ def test_pipeline_end_to_end(tmp_path):
                          capture_output=True, text=True)
     assert rep.returncode == 0, rep.stderr[-3000:]
     assert (results / "report.html").stat().st_size > 10_000
+    # the first page: what was run and the verdicts, against each other and the papers
+    vs_paper = pd.read_csv(results / "vs_paper.csv")
+    assert len(vs_paper) >= 40 and vs_paper.verdict.notna().all()
+    page = (results / "landing.html").read_text()
+    assert "Do the engines agree?" in page and "Against the papers" in page
+    assert "Do the engines agree?" in (results / "report.html").read_text()
     # a second run has nothing left to do
     again = subprocess.run(base + ["--cores", "1", "--dry-run", "all"], capture_output=True,
                            text=True)

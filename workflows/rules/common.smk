@@ -17,6 +17,10 @@ except ConfigError as exc:
     sys.exit(2)
 
 RESULTS = CFG["results"]
+# the report's first page (rule landing), read when the report is built
+if os.path.exists(f"{RESULTS}/landing.html"):
+    with open(f"{RESULTS}/landing.html") as _fh:
+        config["_landing_html"] = _fh.read()
 #: the papers' published values (references/README.md)
 REFERENCES = os.path.join(workflow.basedir, "references")
 _skipped = []
@@ -78,7 +82,7 @@ def deposit_trend(study):
 
 def get_final_output():
     out = [f"{RESULTS}/summary.csv", f"{RESULTS}/comparison.csv", f"{RESULTS}/failures.csv",
-           f"{RESULTS}/vs_paper.csv"]
+           f"{RESULTS}/vs_paper.csv", f"{RESULTS}/landing.html"]
     if any(r.engine.startswith("lammps") and CFG["_cases"][(r.study, r.variant, r.seed)]["particles"]
            ["aspect_ratio"] > 0 for r in RUNS):
         out.append(f"{RESULTS}/body_check/body_check.png")  # rods on LAMMPS: check its bodies

@@ -325,3 +325,23 @@ rule plot_tapping_snapshots:
     shell:
         "{PYTHON} -m workflows.scripts.plot_tapping --snapshots-out {output}"
         " {params.dirs} --taps 0 -1 2> {log}"
+
+
+rule landing:
+    input:
+        summary=f"{RESULTS}/summary.csv",
+        comparison=f"{RESULTS}/comparison.csv",
+        failures=f"{RESULTS}/failures.csv",
+        vs_paper=f"{RESULTS}/vs_paper.csv",
+    output:
+        page=f"{RESULTS}/landing.html",
+        figure=report(
+            f"{RESULTS}/figures/engine_differences.png",
+            caption="../report/engine_differences.rst",
+            category="Tables",
+        ),
+    log:
+        f"{RESULTS}/landing.log",
+    shell:
+        "{PYTHON} -m workflows.scripts.landing --results {RESULTS} --html {output.page}"
+        " --figure {output.figure} 2> {log}"
