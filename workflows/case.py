@@ -463,15 +463,75 @@ def engine_available(engine: str) -> bool:
     return True
 
 
+#: where a study's ``extends`` looks for a profile named without a folder
+PROFILE_DIR = Path(__file__).resolve().parent / "config"
+#: study keys taken whole from the extending study when it gives them (not merged)
+REPLACED_ON_EXTEND = ("variants", "engine_seeds")
+
+
+def _profile_path(name: str, source: str, at: str) -> Path:
+    path = Path(name)
+    for candidate in ([path] if path.is_absolute() else [PROFILE_DIR / path, Path.cwd() / path]):
+        if candidate.is_file():
+            return candidate
+    raise ConfigError(f"{source}: {at}.extends: no profile {name!r} (a file of "
+                      f"{PROFILE_DIR.relative_to(PROFILE_DIR.parents[1])}/ or a path)")
+
+
+def resolve_extends(config: dict, source: str = "config") -> dict:
+    """A configuration with every study's ``extends: <profile>[#<study>]`` replaced by
+    that study of that profile, deep-merged with the extending study's own keys
+    (``variants`` and ``engine_seeds``, when given, replace the base's instead). A
+    profile named without a folder is looked up in ``workflows/config/``; ``#<study>``
+    may be left out when the profile has one study. Chains are followed; a cycle is an
+    error."""
+    studies = config.get("studies") if isinstance(config, dict) else None
+    if not isinstance(studies, dict):
+        return config
+    out = dict(config, studies={})
+    for name, study in studies.items():
+        out["studies"][name] = (_extended(study, source, f"studies.{name}", ())
+                                if isinstance(study, dict) and "extends" in study else study)
+    return out
+
+
+def _extended(study: dict, source: str, at: str, seen: tuple) -> dict:
+    ref = study["extends"]
+    if not isinstance(ref, str) or not ref.strip():
+        raise ConfigError(f"{source}: {at}.extends = {ref!r} is not allowed; use "
+                          "'<profile>.yaml#<study>'")
+    file, _, base_name = ref.partition("#")
+    path = _profile_path(file, source, at)
+    base_studies = (read_yaml(path) or {}).get("studies") or {}
+    if not base_name:
+        if len(base_studies) != 1:
+            raise ConfigError(f"{source}: {at}.extends = {ref!r}: {path.name} has studies "
+                              f"{sorted(base_studies)}; name one as '{file}#<study>'")
+        base_name = next(iter(base_studies))
+    if base_name not in base_studies:
+        raise ConfigError(f"{source}: {at}.extends = {ref!r}: {path.name} has no study "
+                          f"{base_name!r}; use one of {sorted(base_studies)}")
+    key = (str(path.resolve()), base_name)
+    if key in seen:
+        raise ConfigError(f"{source}: {at}.extends = {ref!r} comes back to itself (a cycle)")
+    base = base_studies[base_name]
+    if isinstance(base, dict) and "extends" in base:
+        base = _extended(base, str(path), f"studies.{base_name}", seen + (key,))
+    own = {k: v for k, v in study.items() if k != "extends"}
+    base = {k: v for k, v in base.items() if not (k in REPLACED_ON_EXTEND and k in own)}
+    return deep_merge(base, own)
+
+
 def validate_config(config: dict, source: str = "config") -> dict:
     """Validate a pipeline configuration and every case it expands to.
 
     Returns the configuration with defaults filled and, under ``_cases``, the merged
-    and validated case of every ``(study, variant, seed)``.
+    and validated case of every ``(study, variant, seed)``. Studies that ``extends`` a
+    study of another profile are resolved first (:func:`resolve_extends`).
     """
     if not isinstance(config, dict):
         raise ConfigError(f"{source}: a configuration is a mapping of keys")
-    config = coerce_numbers(copy.deepcopy(config))
+    config = coerce_numbers(resolve_extends(copy.deepcopy(config), source))
     _raise_first(_Validator(_load_schema("config.schema.yaml")).iter_errors(config), source)
     cases = {}
     for name, study in config["studies"].items():
