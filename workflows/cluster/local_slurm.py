@@ -53,6 +53,8 @@ MIN_JOB_AGE = 600
 DAEMONS = ("slurmd", "slurmctld", "munged")  # stopped in this order
 #: SLURM's own configuration, which commands read before the configless copy
 SITE_CONF = Path("/etc/slurm/slurm.conf")
+#: Debian's switch for service starts by package scripts (exit 101: forbidden)
+POLICY_RC = Path("/usr/sbin/policy-rc.d")
 #: where a configless slurmd links its copy of the configuration, and SLURM's commands
 #: look after SITE_CONF (SLURM 22.05)
 CONFIGLESS = Path("/run/slurm/conf")
@@ -150,12 +152,25 @@ def ensure_installed() -> None:
         raise Unavailable(f"SLURM is not installed ({', '.join(missing)} missing) and this "
                           f"user cannot install it; as root: {how}")
     apt = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
-    for cmd in (["apt-get", "update", "-qq"],
-                ["apt-get", "install", "-y", "-qq", "--no-install-recommends", *PACKAGES]):
-        r = subprocess.run(cmd, env=apt, capture_output=True, text=True)
-        if r.returncode != 0:
-            last = (r.stderr.strip() or r.stdout.strip() or "no output").splitlines()[-1]
-            raise Unavailable(f"'{' '.join(cmd)}' failed (exit {r.returncode}): {last}")
+    # the packages' own services must not start (a system munged would stay behind, and
+    # one that cannot start fails the install): a policy that forbids starts, as in
+    # Docker images, for the install's duration when the machine has none
+    policy = POLICY_RC
+    mine = not policy.exists()
+    if mine:
+        policy.write_text("#!/bin/sh\n# rodpack local_slurm: no service starts while installing\n"
+                          "exit 101\n")
+        policy.chmod(0o755)
+    try:
+        for cmd in (["apt-get", "update", "-qq"],
+                    ["apt-get", "install", "-y", "-qq", "--no-install-recommends", *PACKAGES]):
+            r = subprocess.run(cmd, env=apt, capture_output=True, text=True)
+            if r.returncode != 0:
+                last = (r.stderr.strip() or r.stdout.strip() or "no output").splitlines()[-1]
+                raise Unavailable(f"'{' '.join(cmd)}' failed (exit {r.returncode}): {last}")
+    finally:
+        if mine:
+            policy.unlink(missing_ok=True)
     if _missing():
         raise Unavailable(f"{', '.join(_missing())} still missing after {how}")
 
