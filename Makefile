@@ -1,7 +1,7 @@
 # rodpack: two commands do everything.
 #   make run    set up, then run the default pipeline (quick profile) and build the report
 #   make test   set up, then the whole test suite
-# Other targets: setup, liggghts, doctor, lint, clean.
+# Other targets: setup, liggghts, doctor, lint, clean, slurm-up, slurm-down.
 SHELL   := /bin/bash
 PYTHON  ?= python3
 VENV    ?= .venv
@@ -11,7 +11,7 @@ CONFIG  ?= workflows/config/quick.yaml
 RESULTS ?= results
 STAMP   := $(VENV)/.stamp-setup
 
-.PHONY: setup liggghts run stop test doctor lint clean bench
+.PHONY: setup liggghts run stop test doctor lint clean bench slurm-up slurm-down
 
 setup: $(STAMP) liggghts
 
@@ -63,6 +63,14 @@ lint: setup
 # pysim against LAMMPS and LIGGGHTS, alternating, on this machine: results/bench.csv + .png
 bench: setup
 	$(PY) -m workflows.bench --out $(RESULTS)/bench.csv
+
+# a one-node SLURM cluster on this machine to try workflows/profiles/slurm on (root;
+# installs Debian's slurm and munge when missing): docs/cluster.md
+slurm-up:
+	$(PYTHON) -m workflows.cluster.local_slurm up
+
+slurm-down:
+	$(PYTHON) -m workflows.cluster.local_slurm down
 
 clean:
 	rm -rf $(RESULTS) .snakemake

@@ -587,6 +587,22 @@ def venv_bin(name: str) -> str:
     return found
 
 
+#: prefixes of the variables with which SLURM and its PMI describe the job step that runs
+#: the runner. An engine that inherits them takes itself for a rank that srun started:
+#: Debian's Open MPI (LIGGGHTS) then aborts in MPI_Init, built without SLURM's PMI, and
+#: mpirun and MPICH's mpiexec start their ranks with a nested srun, which waits for the
+#: CPUs that the step itself holds.
+JOB_STEP_PREFIXES = ("SLURM", "PMI_", "PMIX_")
+
+
+def engine_env() -> dict:
+    """This process's environment less the batch system's job-step variables
+    (:data:`JOB_STEP_PREFIXES`): an engine and its MPI ranks start on this node as on a
+    workstation, inside the CPUs that the job holds (an engine job is one task on one node
+    with a CPU per rank)."""
+    return {k: v for k, v in os.environ.items() if not k.startswith(JOB_STEP_PREFIXES)}
+
+
 def command(engine: str, data: Path, outdir: Path, case: dict, ranks: int = 1,
             extra_vars: dict | None = None) -> list[str]:
     """The command line that runs the case's deck."""
@@ -708,7 +724,7 @@ def run(engine: str, case: dict, data: Path, outdir: Path, ranks: int = 1,
             (work / "vrods.txt").read_text().strip()
     cmd = command(engine, engine_data, work.resolve(), case, ranks, extra)
     screen_path = work / "screen.txt"
-    env = dict(os.environ, OMP_NUM_THREADS="1")
+    env = dict(engine_env(), OMP_NUM_THREADS="1")
     t0 = time.perf_counter()
     with open(screen_path, "w") as screen:
         proc = _run_pruning(cmd, screen, work, env, timeout)

@@ -74,6 +74,34 @@ def test_liggghts_deck(tiny, tmp_path):
     check_common_format(tmp_path)
 
 
+#: what a SLURM job step (srun) puts in the environment of the runner, in part
+JOB_STEP = {"SLURM_JOB_ID": "7", "SLURM_JOBID": "7", "SLURM_STEP_ID": "0", "SLURM_STEPID": "0",
+            "SLURM_NODELIST": "node1", "SLURM_PROCID": "0", "SLURM_LOCALID": "0",
+            "SLURM_NTASKS": "1", "SLURM_NPROCS": "1", "SLURMD_NODENAME": "node1"}
+
+
+def test_engine_env_drops_the_job_step(monkeypatch):
+    for k, v in {**JOB_STEP, "PMI_RANK": "0", "PMIX_RANK": "0"}.items():
+        monkeypatch.setenv(k, v)
+    monkeypatch.setenv("OMPI_MCA_btl", "self,vader")  # the user's MPI settings stay
+    env = engines.engine_env()
+    assert not [k for k in env if k.startswith(("SLURM", "PMI"))]
+    assert env["OMPI_MCA_btl"] == "self,vader" and env["PATH"] == os.environ["PATH"]
+
+
+@pytest.mark.engines
+@needs_liggghts
+def test_liggghts_runs_inside_a_slurm_job_step(tiny, tmp_path, monkeypatch):
+    """Debian's Open MPI aborts in MPI_Init when it finds a job step's variables (it takes
+    itself for a rank that srun started, without SLURM's PMI): the engine does not get
+    them."""
+    for k, v in JOB_STEP.items():
+        monkeypatch.setenv(k, v)
+    case, d = tiny
+    summary = engines.run("liggghts", case, d / "init.data", tmp_path, timeout=600)
+    assert "LIGGGHTS" in summary["engine_version"] and summary["steps"] > 0
+
+
 def test_pysim_cli_writes_common_format(tiny, tmp_path):
     import yaml
 

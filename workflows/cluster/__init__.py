@@ -1,0 +1,1 @@
+"""Running the pipeline on a cluster: a one-node SLURM cluster for trying the profile."""
