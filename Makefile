@@ -9,6 +9,8 @@ PY      := $(VENV)/bin/python
 CORES   ?= 2
 CONFIG  ?= workflows/config/quick.yaml
 RESULTS ?= results
+# RESULTS given (make run RESULTS=...) overrides the profile's 'results:' folder
+RESULTS_OPT := $(if $(filter command line environment,$(origin RESULTS)),--config results=$(RESULTS))
 STAMP   := $(VENV)/.stamp-setup
 
 .PHONY: setup liggghts run stop test doctor lint clean bench slurm-up slurm-down
@@ -42,8 +44,8 @@ liggghts:
 
 run: setup
 	$(PY) -m workflows.scripts.unlock_if_idle --configfile $(CONFIG)
-	$(VENV)/bin/snakemake --cores $(CORES) --configfile $(CONFIG) --keep-going --rerun-incomplete
-	$(VENV)/bin/snakemake --cores 1 --configfile $(CONFIG) --report $(RESULTS)/report.html
+	$(VENV)/bin/snakemake --cores $(CORES) --configfile $(CONFIG) $(RESULTS_OPT) --keep-going --rerun-incomplete
+	$(VENV)/bin/snakemake --cores 1 --configfile $(CONFIG) $(RESULTS_OPT) --report $(RESULTS)/report.html
 	@$(PY) -m workflows.scripts.landing --results $(RESULTS) --print
 	@echo "results: $(RESULTS)/summary.csv $(RESULTS)/comparison.csv $(RESULTS)/vs_paper.csv $(RESULTS)/report.html"
 

@@ -9,7 +9,12 @@ filled part of a container (science.md section 5).
 * filled part: ``phi_fill = sum_i V_i(z < H) / (A (H - z_0))`` with ``z_0`` the bottom
   and ``H`` the top surface of the grains: the mean over horizontal columns (squares of
   side ``column`` in 3-D, intervals in 2-D) of the highest grain surface point whose
-  centre lies in the column.
+  centre lies in the column;
+* enclosing cylinder (Pournin et al. 2005, section 4: "the total volume occupied by the
+  grains divided by the volume of the enclosing truncated cylinder (upon elimination of
+  outliers)"): ``phi_enc = sum_{i in bed} V_i / (A (z_top - z_bot))`` with ``z_bot`` and
+  ``z_top`` the lowest and highest surface points of the bed's grains; outliers are the
+  grains above the first empty horizontal gap (:func:`bed_grains`).
 
 The vertical axis is ``z`` in 3-D and ``y`` in 2-D (:attr:`analysis.frame.Frame.vertical`).
 """
@@ -205,6 +210,59 @@ class FilledPackingFraction(Observable):
         below = float(cumulative_measure(frame, [top], axis)[0] - cumulative_measure(frame, [bottom], axis)[0])
         self._set(phi=below / (area * (top - bottom)), top=top, height=top - bottom,
                   grain_measure=below)
+        return self
+
+
+def bed_grains(frame: Frame, axis: int | None = None) -> np.ndarray:
+    """Boolean mask of the grains of the bed: the grains whose height ranges
+    ``[lo_i, hi_i]`` (:meth:`analysis.frame.Frame.extent`) chain up from the lowest grain
+    without a gap. Sorted by ``lo``, grain ``k`` belongs to the bed when ``lo_k`` is not
+    above the highest ``hi`` of the grains before it; the first grain that is starts the
+    outliers, and every grain after it is one too: a horizontal plane separates them
+    from the bed, so they touch nothing in it (grains thrown up by a tap). A grain
+    detached from the bed whose height range overlaps the bed's is kept: it does not
+    raise the top of the enclosing cylinder by more than its own extent."""
+    axis = frame.vertical if axis is None else axis
+    lo, hi = frame.extent(axis)
+    order = np.argsort(lo, kind="stable")
+    reach = np.maximum.accumulate(hi[order])
+    gap = np.flatnonzero(lo[order][1:] > reach[:-1])
+    keep = np.zeros(frame.n, bool)
+    keep[order[:gap[0] + 1 if len(gap) else frame.n]] = True
+    return keep
+
+
+class EnclosingPackingFraction(Observable):
+    """Volumetric density of Pournin et al. (2005, section 4): the volume of the grains
+    of the bed over the volume of the enclosing truncated cylinder (tapping study).
+
+    ``phi = sum_{i in bed} V_i / (A (z_top - z_bot))``: the bed and its outliers as
+    :func:`bed_grains` defines them, ``z_bot`` and ``z_top`` the lowest and highest
+    surface points of the bed's grains, ``A`` = ``area`` (default the box cross-section;
+    a cylinder of diameter ``D_c``: ``pi D_c^2 / 4``). Unlike
+    :class:`FilledPackingFraction` the whole of every bed grain counts, the top is the
+    highest point rather than the mean surface, and the bottom is the lowest grain, not
+    the base (a bed in flight is not diluted by the gap under it). Results: ``phi``,
+    ``bottom``, ``top``, ``height``, ``grain_measure`` (of the bed), ``outliers``
+    (grains left out).
+    """
+
+    _results = ("phi", "bottom", "top", "height", "grain_measure", "outliers")
+
+    def __init__(self, area: float | None = None, axis: int | None = None):
+        self.area, self.axis = area, axis
+
+    def compute(self, frame: Frame, contacts=None):
+        axis = frame.vertical if self.axis is None else self.axis
+        if frame.n == 0:
+            raise ValueError("no particles: the enclosing cylinder is undefined")
+        area = horizontal_area(frame, axis) if self.area is None else float(self.area)
+        bed = bed_grains(frame, axis)
+        lo, hi = frame.extent(axis)
+        bottom, top = float(lo[bed].min()), float(hi[bed].max())
+        measure = float(np.sum(frame.particle_measures()[bed]))
+        self._set(phi=measure / (area * (top - bottom)), bottom=bottom, top=top,
+                  height=top - bottom, grain_measure=measure, outliers=int(frame.n - bed.sum()))
         return self
 
 

@@ -214,34 +214,44 @@ def analyse_jammed(run_dir, c_min: int | None = None, energy_target: float | Non
     return rows, curves, run.thermo
 
 
-def tap_curves(run: RunData, start_step: int, dt: float, period: float, amplitude: float,
-               frames_per_tap: int, container_diameter: float, layer_thickness: float,
-               n_layers: int = 4) -> pd.DataFrame:
+def tap_curves(run: RunData, start_step: int | None, dt: float, period: float,
+               amplitude: float, frames_per_tap: int, container_diameter: float,
+               layer_thickness: float, n_layers: int = 4) -> pd.DataFrame:
     """Per frame of a tapping run: ``tap`` (periods since tapping began), ``phase``
     (index of the frame within its tap), base height ``z_base``, volumetric density
     ``phi`` of the filled part of the cylinder (grain volume between the base and the top
     surface over ``pi D_c^2 / 4`` times that height), its moving average ``phi_avg`` over
-    one oscillation, the surface height ``top``, the mean angle between spines and the
-    base ``angle`` (degrees), order with respect to gravity ``p2_z`` and, for each of
-    ``n_layers`` layers of ``layer_thickness`` stacked on the base, ``phi_layer<k>`` and
-    ``angle_layer<k>`` (grains assigned to layers by centre); every density and angle
-    column also as ``<column>_avg``, its moving average over one oscillation."""
+    one oscillation, the surface height ``top``, the density of Pournin et al. (2005)
+    ``phi_enclosing`` (grain volume of the bed over the enclosing truncated cylinder,
+    :class:`analysis.packing.EnclosingPackingFraction`) with the number of ``outliers``
+    it leaves out, the mean angle between spines and the base ``angle`` (degrees), order
+    with respect to gravity ``p2_z`` and, for each of ``n_layers`` layers of
+    ``layer_thickness`` stacked on the base, ``phi_layer<k>`` and ``angle_layer<k>``
+    (grains assigned to layers by centre); every density and angle column also as
+    ``<column>_avg``, its moving average over one oscillation. ``start_step`` ``None``:
+    the tapping began at the first frame (frame 0 is the settled packing; a free
+    preparation's start is known from its run only)."""
     from analysis.order import AngleToHorizontal
-    from analysis.packing import FilledPackingFraction, layer_edges, period_average
-    from analysis.packing import slab_packing_fraction
+    from analysis.packing import (EnclosingPackingFraction, FilledPackingFraction,
+                                  layer_edges, period_average, slab_packing_fraction)
 
     area = np.pi * container_diameter**2 / 4
     omega = 2 * np.pi / period
     rows = []
-    for frame, _contacts in run.frames():
+    frames = run.frames()
+    if start_step is None and len(frames):
+        start_step = frames[0][0].step
+    for frame, _contacts in frames:
         t = (frame.step - start_step) * dt
         zb = amplitude * np.sin(omega * t) if t > 0 else 0.0
         fill = FilledPackingFraction(bottom=zb, area=area).compute(frame)
+        enc = EnclosingPackingFraction(area=area).compute(frame)
         edges = layer_edges(zb, layer_thickness, n_layers)
         ang = AngleToHorizontal(layers=edges).compute(frame)
         row = {"step": frame.step, "tap": t / period,
                "phase": int(round(t / period * frames_per_tap)) % frames_per_tap,
-               "z_base": zb, "phi": fill.phi, "top": fill.top, "angle": ang.mean_deg,
+               "z_base": zb, "phi": fill.phi, "top": fill.top,
+               "phi_enclosing": enc.phi, "outliers": enc.outliers, "angle": ang.mean_deg,
                "p2_z": NematicOrder().compute(frame).gravity_order, "n": len(frame.ids)}
         phil = slab_packing_fraction(frame, edges, area=area)
         for k in range(n_layers):
@@ -249,8 +259,8 @@ def tap_curves(run: RunData, start_step: int, dt: float, period: float, amplitud
             row[f"angle_layer{k + 1}"] = np.degrees(ang.layer_mean[k])
         rows.append(row)
     curves = pd.DataFrame(rows)
-    for col in ["phi", "angle"] + [f"{q}_layer{k + 1}" for k in range(n_layers)
-                                   for q in ("phi", "angle")]:
+    for col in ["phi", "phi_enclosing", "angle"] + [f"{q}_layer{k + 1}" for k in range(n_layers)
+                                                    for q in ("phi", "angle")]:
         curves[f"{col}_avg"] = (period_average(curves[col].to_numpy(), frames_per_tap)
                                 if len(curves) else [])
     return curves
@@ -346,7 +356,11 @@ def analyse_tapping(run_dir, **plan):
     standard deviation over those frames as the uncertainty of the first two (a spread
     over taps, not a seed-to-seed error); and how the late taps shake the bed, from the
     thermo rows of the same window (:func:`tap_cycle`, :func:`cycle_rows`); the state at
-    the paper's tap counts (:func:`tap_mark_rows`)."""
+    the paper's tap counts (:func:`tap_mark_rows`). The density of Pournin et al. (2005)
+    comes alongside: ``phi_settled_enclosing``, ``phi_tapped_enclosing`` and
+    ``phi_late_enclosing`` (``phi_enclosing`` of :func:`tap_curves`), and
+    ``outliers_late``, the mean number of grains it left out over the late window.
+    ``plan["start_step"]`` ``None``: tapping began at the first frame."""
     run = RunData(run_dir)
     curves = tap_curves(run, **plan)
     if not len(curves):
@@ -367,6 +381,12 @@ def analyse_tapping(run_dir, **plan):
     rows += [("phi_late", float(late.phi.mean()), float(late.phi.std(ddof=0))),
              ("angle_late", float(late.angle.mean()), float(late.angle.std(ddof=0))),
              ("p2_z_late", float(late.p2_z.mean()), np.nan)]
+    rows += [("phi_settled_enclosing", float(first.phi_enclosing), np.nan),
+             ("phi_tapped_enclosing", float(last_tap.phi_enclosing.mean()),
+              float(last_tap.phi_enclosing.std(ddof=0))),
+             ("phi_late_enclosing", float(late.phi_enclosing.mean()),
+              float(late.phi_enclosing.std(ddof=0))),
+             ("outliers_late", float(late.outliers.mean()), np.nan)]
     k = 1
     while f"angle_layer{k}" in curves:
         rows.append((f"angle_tapped_layer{k}", float(last_tap[f"angle_layer{k}"].mean()), np.nan))
@@ -374,7 +394,8 @@ def analyse_tapping(run_dir, **plan):
         k += 1
     rows += tap_mark_rows(curves)
     thermo = run.thermo
-    cycle = tap_cycle(thermo, plan["start_step"], plan["dt"], plan["period"],
+    start = plan["start_step"] if plan["start_step"] is not None else int(first.step)
+    cycle = tap_cycle(thermo, start, plan["dt"], plan["period"],
                       first_tap=float(late.tap.min()) - 1.0)
     rows += cycle_rows(cycle, int(curves.n.iloc[0]))
     return rows, curves, thermo

@@ -8,7 +8,8 @@
 
 A bad case file is a one-line error and exit status 2; a run that blows up stops with a
 one-line message naming the step and particles, exit status 3, and keeps its last
-checkpoint. Ctrl-C (SIGINT) stops a run with a one-line message and exit status 130; its
+checkpoint (so does a tapping run whose free preparation has not settled by its
+``max_time``). Ctrl-C (SIGINT) stops a run with a one-line message and exit status 130; its
 last checkpoint stays, and the same command with ``--resume`` goes on from it.
 """
 from __future__ import annotations
@@ -76,7 +77,7 @@ def _run(case, args) -> int:
     except ResumeError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    except (BlowUpError, growth.GrowthLimitError) as exc:
+    except (BlowUpError, growth.GrowthLimitError, tapping.SettleError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 3
     except (KeyboardInterrupt, SystemError) as exc:

@@ -53,7 +53,8 @@ from __future__ import annotations
 import numpy as np
 
 from pysim.forces import (D_COH, END_BONDS, F_COH, GAMMA_N, GAMMA_T, HERTZ, HOOKE, K_N, K_T,
-                          MU, cohesion_force, elastic_energy, normal_force, tangential_force)
+                          KEEP_SPRING, MU, cohesion_force, elastic_energy, normal_force,
+                          tangential_force)
 from pysim.geometry import closest_params, closest_select
 from pysim.jit import inline_njit, njit, pnjit, prange, prefetch_write
 
@@ -183,7 +184,7 @@ def pair_force(g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, ri, rj, vi0, vi1, vi2,
         if delta > 0.0:
             ft0, ft1, ft2, x0, x1, x2 = tangential_force(
                 kt, gt, mu, fn, x0, x1, x2, n0, n1, n2, vr0 - vn * n0, vr1 - vn * n1,
-                vr2 - vn * n2, dt)
+                vr2 - vn * n2, dt, (law & KEEP_SPRING) != 0)
         else:
             x0 = 0.0
             x1 = 0.0
@@ -601,6 +602,7 @@ def _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
     i, the torques on i and j, the new spring and the overlap into ``S``; on the first
     ``mc`` columns rounded up to a multiple of :data:`PAD`."""
     cohesive = fcoh != 0.0
+    keep_spring = (law & KEEP_SPRING) != 0
     mc = min(CAP, (mc + PAD - 1) // PAD * PAD)
     if not friction:
         for m in range(mc):
@@ -676,7 +678,7 @@ def _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
         t2 = vr2 - vt * n2
         f0, f1, f2, x0, x1, x2 = tangential_force(
             kt, gt, mu, fn, S[np.uint64(_H * CAP + m)], S[np.uint64((_H + 1) * CAP + m)],
-            S[np.uint64((_H + 2) * CAP + m)], n0, n1, n2, t0, t1, t2, dt)
+            S[np.uint64((_H + 2) * CAP + m)], n0, n1, n2, t0, t1, t2, dt, keep_spring)
         # out of contact (a cohesive gap): no tangential force, the spring restarts
         f0 = f0 if touch else 0.0
         f1 = f1 if touch else 0.0
@@ -1063,6 +1065,7 @@ def _rod_laws(R, mr, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
     force on i, the torques on i and j, the elastic energy (0 out of overlap), the spring
     (in place) and the overlap. On ``mr`` rounded up to :data:`PAD` columns."""
     cohesive = fcoh != 0.0
+    keep_spring = (law & KEEP_SPRING) != 0
     mr = min(RCAP, (mr + PAD - 1) // PAD * PAD)
     for m in range(mr):
         g0 = R[np.uint64(_RG * RCAP + m)]
@@ -1114,7 +1117,7 @@ def _rod_laws(R, mr, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
             f0, f1, f2, x0, x1, x2 = tangential_force(
                 kt, gt, mu, fn, R[np.uint64(_RH * RCAP + m)], R[np.uint64((_RH + 1) * RCAP + m)],
                 R[np.uint64((_RH + 2) * RCAP + m)], n0, n1, n2, vr0 - vn * n0, vr1 - vn * n1,
-                vr2 - vn * n2, dt)
+                vr2 - vn * n2, dt, keep_spring)
             ft0 = f0 if touch else 0.0
             ft1 = f1 if touch else 0.0
             ft2 = f2 if touch else 0.0

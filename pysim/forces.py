@@ -25,6 +25,14 @@ Damping is absolute (force per velocity), as LAMMPS ``damping velocity`` and LIG
 fast. A law id with the bit :data:`NO_TENSION` added (``law | NO_TENSION``) clips the
 contact force at zero instead, ``f_n = max(0, k delta + gamma d(delta)/dt)``, as LAMMPS'
 ``limit_damping`` keyword does; cohesion is added after the clip.
+
+Tangential law (:func:`tangential_force`): a spring ``xi_t`` with history and a dashpot,
+``F_t = -k_t xi_t - gamma_t v_t``, capped at ``mu |f_n|``. Past the cap the spring is by
+default reset to the length that gives the capped force (Cundall-Strack, as LAMMPS and
+LIGGGHTS do); with the bit :data:`KEEP_SPRING` added to the law id the force alone is
+rescaled and the spring keeps the integral of ``v_t`` (Pournin et al. 2005, section 3.1:
+``xi_t`` is the integral of eq. 6 from the start of the contact, and
+``f_t <- mu |f_n| f_t / |f_t|`` whenever ``|f_t| > mu |f_n|``).
 """
 from __future__ import annotations
 
@@ -38,6 +46,8 @@ HARMONIC = 2
 LAW_IDS = {"hooke": HOOKE, "hertz": HERTZ, "harmonic": HARMONIC}
 #: bit added to a law id: no tensile contact force (the damping cannot pull)
 NO_TENSION = 8
+#: bit added to a law id: the tangential spring is not reset at the Coulomb cap
+KEEP_SPRING = 16
 
 # indices into the contact parameter array (END_BONDS: 1.0 selects the end-bond geometry
 # of rod pairs, pysim.contacts.end_bond)
@@ -93,13 +103,18 @@ def cohesion_force(f_coh, d_coh, delta):
 
 
 @njit
-def tangential_force(kt, gt, mu, fn, x0, x1, x2, n0, n1, n2, vt0, vt1, vt2, dt):
+def tangential_force(kt, gt, mu, fn, x0, x1, x2, n0, n1, n2, vt0, vt1, vt2, dt, keep_spring):
     """Tangential spring with history and Coulomb cap (science.md section 3).
 
     ``(x0, x1, x2)`` is the tangential spring ``xi_t`` of this contact: it is first rotated
     into the current tangent plane (keeping its length), then ``xi_t += v_t dt``,
     ``F_t = -k_t xi_t - gamma_t v_t``; if ``|F_t| > mu |f_n|`` the force is rescaled to
-    ``mu |f_n|`` and the spring with it (``xi_t = -(F_t + gamma_t v_t)/k_t``).
+    ``mu |f_n|`` and, unless ``keep_spring``, the spring with it (``xi_t = -(F_t +
+    gamma_t v_t)/k_t``). With ``keep_spring`` (Pournin et al. 2005, eqs. 4-6 and the cap
+    of section 3.1) the spring stays the integral of ``v_t`` past the cap, so a contact
+    that slid must slide back by the excess before its force drops below the cap. The
+    paper assumes ``n`` constant during a contact, where the rotation does nothing; both
+    variants rotate, so that ``F_t`` stays tangential when ``n`` turns.
     Returns ``(F_t (3), new xi_t (3))`` (``F_t`` the force on i).
 
     Written with selects, not branches, so that a loop over contacts that calls it can
@@ -135,7 +150,7 @@ def tangential_force(kt, gt, mu, fn, x0, x1, x2, n0, n1, n2, vt0, vt1, vt2, dt):
     f0 = f0 * sc if scale else f0
     f1 = f1 * sc if scale else f1
     f2 = f2 * sc if scale else f2
-    reset = slip & (kt > 0.0)
+    reset = slip & (kt > 0.0) & (not keep_spring)
     ikt = 1.0 / kt
     y0 = -(f0 + gt * vt0) * ikt
     y1 = -(f1 + gt * vt1) * ikt

@@ -22,7 +22,7 @@ import numpy as np
 
 from pysim import integrators as itg
 from pysim.contacts import PAIR_SCRATCH, REC_COLUMNS, pair_forces, worst_overlap
-from pysim.forces import END_BONDS, LAW_IDS, NO_TENSION, contact_params
+from pysim.forces import END_BONDS, KEEP_SPRING, LAW_IDS, NO_TENSION, contact_params
 from pysim.jit import get_threads
 from pysim.neighbors import row_starts, transpose
 from pysim.state import State
@@ -49,6 +49,10 @@ class ContactModel:
     * ``limit_damping``: clip every contact's normal force (grains and walls) at zero, so
       that the damping never pulls (LAMMPS' ``limit_damping``); off by default, as in
       science.md's law.
+    * ``tangential_spring``: what the tangential spring does past the Coulomb cap, in
+      grain and wall contacts: ``"reset"`` (default) to the length that gives the capped
+      force, or ``"keep"`` its integral of the sliding velocity, only the force being
+      capped (Pournin et al. 2005, section 3.1; :func:`pysim.forces.tangential_force`).
     """
 
     law: str
@@ -64,6 +68,7 @@ class ContactModel:
     mu_wall: float | None = None
     spine_contact: str = "closest"
     limit_damping: bool = False
+    tangential_spring: str = "reset"
 
     def __post_init__(self):
         if self.law not in LAW_IDS:
@@ -71,6 +76,9 @@ class ContactModel:
         if self.spine_contact not in ("closest", "end_bonds"):
             raise ValueError(f"unknown spine_contact {self.spine_contact!r}; valid: "
                              "'closest', 'end_bonds'")
+        if self.tangential_spring not in ("reset", "keep"):
+            raise ValueError(f"unknown tangential_spring {self.tangential_spring!r}; valid: "
+                             "'reset', 'keep'")
         if self.spine_contact == "end_bonds" and (self.mu > 0 or self.f_coh > 0):
             raise ValueError("spine_contact 'end_bonds' is frictionless and cohesionless "
                              f"(got mu = {self.mu}, f_coh = {self.f_coh})")
@@ -85,8 +93,9 @@ class ContactModel:
     @property
     def law_id(self) -> int:
         """The kernels' law id (:mod:`pysim.forces`), with ``NO_TENSION`` when
-        ``limit_damping``."""
-        return LAW_IDS[self.law] | (NO_TENSION if self.limit_damping else 0)
+        ``limit_damping`` and ``KEEP_SPRING`` when ``tangential_spring`` is ``"keep"``."""
+        return (LAW_IDS[self.law] | (NO_TENSION if self.limit_damping else 0)
+                | (KEEP_SPRING if self.tangential_spring == "keep" else 0))
 
     @property
     def friction(self) -> bool:

@@ -15,15 +15,16 @@ A tapped base is ``amp = a``, ``omega_w = 2 pi nu``. Cylinders are rows of
 are inside.
 
 Wall contacts use the same normal law and tangential history (per grain, wall and
-spine end) with the wall's own parameters; the force on each wall is summed
+spine end), with the same law bits (:data:`pysim.forces.NO_TENSION`,
+:data:`pysim.forces.KEEP_SPRING`), with the wall's own parameters; the force on each wall is summed
 (``wall_force``), which gives wall stresses and the apparent mass on a base.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from pysim.forces import (D_COH, F_COH, GAMMA_N, GAMMA_T, K_N, K_T, MU, cohesion_force,
-                          normal_force, tangential_force)
+from pysim.forces import (D_COH, F_COH, GAMMA_N, GAMMA_T, K_N, K_T, KEEP_SPRING, MU,
+                          cohesion_force, normal_force, tangential_force)
 from pysim.jit import njit
 
 PLANE_COLUMNS = 10
@@ -77,7 +78,7 @@ def _wall_contact(i, e0, e1, e2, n0, n1, n2, delta, wv0, wv1, wv2, x, v, omega, 
         if delta > 0.0:
             ft0, ft1, ft2, x0, x1, x2 = tangential_force(
                 wp[K_T], wp[GAMMA_T], wp[MU], fn, whist[h, 0], whist[h, 1], whist[h, 2], n0, n1,
-                n2, vr0 - vn * n0, vr1 - vn * n1, vr2 - vn * n2, dt)
+                n2, vr0 - vn * n0, vr1 - vn * n1, vr2 - vn * n2, dt, (law & KEEP_SPRING) != 0)
             whist[h, 0] = x0
             whist[h, 1] = x1
             whist[h, 2] = x2

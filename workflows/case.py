@@ -36,6 +36,7 @@ PARAMETER_NAMES = {
     "protocol.rate": "kappa",
     "particles.diameter.sigma": "sigma",
     "particles.aspect_ratio": "alpha",
+    "protocol.preparation.mode": "preparation",
 }
 
 
@@ -284,6 +285,11 @@ def _check_case(case: dict, source: str, at: str):
     if c["friction"] > 0 and not c["k_t"] > 0:
         raise ConfigError(f"{source}: {at}contact.k_t = {c['k_t']} must be > 0 when "
                           f"friction = {c['friction']} > 0")
+    if c.get("wall_friction", 0.0) > 0 and not c["k_t"] > 0:
+        raise ConfigError(f"{source}: {at}contact.k_t = {c['k_t']} must be > 0 when "
+                          f"wall_friction = {c['wall_friction']} > 0")
+    if pr["name"] == "tapping":
+        _check_preparation(pr, source, at)
     # time step against the contact time of the lightest pair
     dmin, dmean, dmax = size_extremes(d)
     m = p["density"] * particle_measure(dmin, alpha, dim)
@@ -357,7 +363,7 @@ def _derive_contact(case: dict, source: str, at: str):
     m = p["density"] * particle_measure(p["diameter"]["mean"], p["aspect_ratio"], p["dimension"])
     k_n, gamma_n = restitution_law(c["restitution"], c["contact_time"], 0.5 * m)
     derived = {"k_n": k_n, "gamma_n": gamma_n}
-    if c.get("friction", 0.0) > 0:
+    if max(c.get("friction", 0.0), c.get("wall_friction", 0.0)) > 0:
         derived["k_t"] = c["k_t"] if c.get("k_t", 0.0) > 0 else KT_PER_KN * k_n
         derived["gamma_t"] = c["gamma_t"] if c.get("gamma_t", 0.0) > 0 else GT_PER_GN * gamma_n
     for key in ("k_n", "gamma_n"):
@@ -370,6 +376,36 @@ def _derive_contact(case: dict, source: str, at: str):
                 f"{c['restitution']} and contact_time {c['contact_time']} (which give "
                 f"{derived[key]:.6g}); give one form only")
     c.update(derived)
+
+
+#: keys of a tapping protocol's ``preparation`` block that only mode ``free`` uses
+FREE_KEYS = ("ke_stop", "check_time", "max_time")
+
+
+def _check_preparation(pr: dict, source: str, at: str):
+    """A tapping protocol's ``preparation``: mode free needs ``ke_stop`` and ``max_time``
+    (``check_time`` defaults to a quarter of the base period) and tests at least once per
+    step and before ``max_time``; mode capped takes none of them."""
+    prep = pr.get("preparation")
+    if prep is None:
+        return
+    key = f"{at}protocol.preparation"
+    if prep["mode"] != "free":
+        extra = [k for k in FREE_KEYS if k in prep]
+        if extra:
+            raise ConfigError(f"{source}: {key}.{extra[0]} is used by mode free only, not "
+                              f"{prep['mode']!r}; remove it")
+        return
+    for k in ("ke_stop", "max_time"):
+        if k not in prep:
+            raise ConfigError(f"{source}: missing key '{key}.{k}' (required by mode free)")
+    prep.setdefault("check_time", 0.25 / pr["frequency"])
+    if prep["check_time"] < pr["dt"]:
+        raise ConfigError(f"{source}: {key}.check_time = {prep['check_time']} is below the time "
+                          f"step dt = {pr['dt']}; use check_time >= dt")
+    if prep["max_time"] < prep["check_time"]:
+        raise ConfigError(f"{source}: {key}.max_time = {prep['max_time']} is below check_time = "
+                          f"{prep['check_time']:g}; use max_time >= check_time")
 
 
 def _check_container(case: dict, source: str, at: str):

@@ -52,6 +52,13 @@ def supports(engine: str, case: dict) -> str | None:
     if case["contact"].get("spine_contact", "closest") != "closest":
         return (f"{engine} has no end-bond rod contacts (contact.spine_contact = "
                 f"{case['contact']['spine_contact']} is pysim's)")
+    if case["contact"].get("tangential_spring", "reset") != "reset":
+        return (f"{engine}'s tangential history is cut back to the Coulomb limit when a contact "
+                "slides; contact.tangential_spring = keep (the spring grows on) is pysim's only")
+    if case["protocol"].get("preparation", {}).get("mode", "capped") != "capped":
+        return (f"the {engine} tapping deck settles under the capping drag for settle_time; "
+                "protocol.preparation.mode = free (settle until the kinetic energy is gone) "
+                "is pysim's only")
     k = kind(case)
     name = case["protocol"]["name"]
     if engine == "lammps-body":

@@ -56,7 +56,8 @@ def model_from_case(case: dict) -> ContactModel:
                         mu=c.get("friction", 0.0), gamma_bg=gamma_bg,
                         gamma_rot=c.get("gamma_rot", gamma_bg * length**2 / 12.0),
                         spine_contact=c.get("spine_contact", "closest"),
-                        limit_damping=c.get("limit_damping", False))
+                        limit_damping=c.get("limit_damping", False),
+                        tangential_spring=c.get("tangential_spring", "reset"))
 
 
 def max_overlap(case: dict) -> float:

@@ -3,9 +3,9 @@ import numpy as np
 import pytest
 
 from analysis.frame import Frame
-from analysis.packing import (FilledPackingFraction, PackingProfile, cumulative_measure,
-                              layer_edges, period_average, packing_fraction,
-                              slab_packing_fraction, surface_height)
+from analysis.packing import (EnclosingPackingFraction, FilledPackingFraction, PackingProfile,
+                              bed_grains, cumulative_measure, layer_edges, period_average,
+                              packing_fraction, slab_packing_fraction, surface_height)
 from tests.analysis.helpers import cubic, frame_of, random_unit, square
 
 
@@ -88,6 +88,36 @@ def test_filled_part_ignores_empty_columns_and_counts_only_grains_below_the_top(
     below = cumulative_measure(fr, [top])[0]
     assert f.grain_measure == pytest.approx(below)
     assert below < fr.particle_volumes().sum()
+
+
+def test_enclosing_cylinder_leaves_out_grains_above_a_gap():
+    """Pournin et al.'s density: upright rods (D = 1, L = 2) standing on z = 0.7 fill
+    [0.7, 3.7]; a sphere flying clear above them is an outlier, one reaching into the
+    bed's height range is not and raises the top to its own."""
+    xy = cubic(0, shape=(5, 5, 1)) + [0.5, 0.5, 2.2]
+    v = np.pi / 4 * 2 + np.pi / 6
+    sphere = np.pi / 6
+
+    def frame(extra):
+        x = np.vstack([xy, extra]) if len(extra) else xy
+        ln = np.r_[np.full(25, 2.0), np.zeros(len(extra))]
+        return frame_of(x, 0.5, [5.0, 5.0, 10.0], axis=[0, 0, 1.0], length=ln,
+                        periodic=(True, True, False))
+
+    bed = EnclosingPackingFraction(area=25.0).compute(frame([]))
+    assert (bed.bottom, bed.top, bed.outliers) == (pytest.approx(0.7), pytest.approx(3.7), 0)
+    assert bed.phi == pytest.approx(25 * v / (25 * 3.0))
+    fly = frame([[2.5, 2.5, 5.0], [1.5, 1.5, 4.3]])  # [4.5, 5.5] and [3.8, 4.8]: one chain
+    assert list(bed_grains(fly)) == [True] * 25 + [False, False]
+    f = EnclosingPackingFraction(area=25.0).compute(fly)
+    assert f.outliers == 2 and f.phi == pytest.approx(bed.phi) and f.top == pytest.approx(3.7)
+    reach = EnclosingPackingFraction(area=25.0).compute(frame([[2.5, 2.5, 4.1]]))  # [3.6, 4.6]
+    assert reach.outliers == 0 and reach.top == pytest.approx(4.6)
+    assert reach.phi == pytest.approx((25 * v + sphere) / (25 * 3.9))
+    # the default area is the box cross-section; an empty frame has no cylinder
+    assert EnclosingPackingFraction().compute(frame([])).phi == pytest.approx(bed.phi)
+    with pytest.raises(ValueError, match="no particles"):
+        EnclosingPackingFraction().compute(frame([]).subset(np.zeros(25, bool)))
 
 
 def test_two_dimensional_profile_of_a_disk_lattice():

@@ -376,3 +376,35 @@ def test_time_step_above_contact_time_is_refused():
     x, d, box = random_spheres(np.ones(50), 0.3, seed=1)
     with pytest.raises(ValueError, match="above 1/10 of the contact time"):
         Simulation(State.spheres(x, d / 2, box), ContactModel("hooke", 1e5, 0.0), dt=1e-3)
+
+
+@pytest.mark.parametrize("spring", ["reset", "keep"])
+def test_sphere_launched_sliding_rolls_off_and_the_kept_spring_undoes_its_slip(spring):
+    """A sphere launched at V0 without spin slides on a frictional floor until it rolls at
+    5/7 V0 with either tangential spring. The slip velocity s = v - omega R falls at
+    3.5 mu g, so the contact point slides V0^2 / (7 mu g) and the reset spring keeps that
+    slip. The kept spring (Pournin et al. 2005) remembers it: its force stays at the cap
+    and drives the contact point back until the net slip fits within the elastic range
+    mu m g / k_t, a back-slip nearly as fast as the launch."""
+    V0, mu, g, kn, R = 0.3, 0.5, 10.0, 1e5, 0.5
+    m = np.pi / 6
+    dt = 1.4e-4
+    st = State.spheres(np.array([[5.0, 5.0, R - m * g / kn]]), R, np.array([10.0, 10.0, 10.0]),
+                       v=np.array([[V0, 0.0, 0.0]]), periodic=(True, True, False))
+    model = ContactModel("hooke", kn, 137.0, k_t=2 / 7 * kn, gamma_t=50.0, mu=mu,
+                         tangential_spring=spring)
+    sim = Simulation(st, model, dt=dt, gravity=(0, 0, -g), planes=[plane((0, 0, 1), (0, 0, 0))])
+    s = [V0]
+    for _ in range(3000):
+        sim.run(1)
+        s.append(st.v[0, 0] - R * st.omega[0, 1])
+    s = np.array(s)
+    slip = dt * (s.sum() - 0.5 * (s[0] + s[-1]))  # net slip of the contact point
+    assert st.v[0, 0] == pytest.approx(5 / 7 * V0, rel=1e-3)
+    assert abs(s[-1]) < 1e-3 * V0  # rolling
+    if spring == "reset":
+        assert slip == pytest.approx(V0**2 / (7 * mu * g), rel=0.05)
+        assert s.min() > -0.1 * V0  # an elastic recoil only
+    else:
+        assert abs(slip) < mu * m * g / (2 / 7 * kn)
+        assert s.min() < -0.8 * V0

@@ -128,3 +128,151 @@ def test_tapping_analysis_of_a_run(tapped):
     assert 0 < v["angle_settled"] < 45 and 0 < v["angle_tapped"] < 90
     assert len(curves) == len(tp.frame_steps)
     np.testing.assert_allclose(curves.tap, tp.tap_of(tp.frame_steps))
+    # Pournin et al.'s density beside ours: a settled bed has no outliers
+    assert curves.outliers.iloc[0] == 0
+    assert 0.25 < v["phi_settled_enclosing"] < 0.6 and 0.25 < v["phi_late_enclosing"] < 0.6
+    assert v["phi_settled_enclosing"] == pytest.approx(curves.phi_enclosing.iloc[0])
+    assert v["outliers_late"] >= 0
+
+
+FREE = {"mode": "free", "ke_stop": 1e-8, "check_time": 0.005, "max_time": 1.0}
+
+
+def free_case(**prep):
+    from workflows.case import deep_merge
+
+    return validate_case(deep_merge(TAP, {"protocol": {"preparation": {**FREE, **prep}}}))
+
+
+def test_plan_of_a_free_preparation_starts_where_the_bed_settled():
+    case = free_case()
+    with pytest.raises(ValueError, match="pass settled"):
+        plan(case["protocol"], 9.81)
+    tp = plan(case["protocol"], 9.81, settled=6250)
+    assert tp.settle_steps == tp.start == tp.frame_steps[0] == 6250
+    ref = plan(validate_case(TAP)["protocol"], 9.81)
+    np.testing.assert_array_equal(tp.frame_steps - tp.start, ref.frame_steps - ref.start)
+    assert settle_drag(case) == (0.0, 0.0)
+
+
+def _run(case, out, resume=False, **kw):
+    from pysim import io
+    from pysim.initial import write_initial
+    from pysim.protocols import tapping
+
+    data = out.parent / "init.data"
+    if not data.exists():
+        write_initial(case, data)
+    return tapping.run(case, io.read_particle_data(data), out, progress=False, resume=resume,
+                       **kw)
+
+
+@pytest.fixture(scope="module")
+def free_run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("free")
+    case = free_case()
+    _run(case, d / "ref")
+    return case, d
+
+
+def test_free_preparation_taps_once_the_kinetic_energy_is_gone(free_run):
+    """No drag; tapping starts at the first test (every check_time) that finds the kinetic
+    energy per grain below ke_stop m g D after one that found it above; frame 0 is that
+    packing and the taps follow as planned from there; the analysis finds the start from
+    the first frame."""
+    from pysim.protocols.tapping import ke_unit
+
+    case, d = free_run
+    out = d / "ref"
+    run = RunData(out)
+    steps = [f.step for f, _ in run.frames()]
+    tp = plan(case["protocol"], case["gravity"], settled=steps[0])
+    assert steps == list(tp.frame_steps)
+    th = run.thermo.set_index("step")  # a row every 250 steps = check_time / dt
+    e = th.ke / (ke_unit(case) * case["particles"]["n"])
+    assert steps[0] % 250 == 0 and e[steps[0]] < 1e-8 <= e[steps[0] - 250]
+    assert (e[e.index < steps[0] - 250] >= 1e-8).all()  # the first test below, after the fall
+    assert 0.05 < steps[0] * tp.dt < 0.5
+    assert e[e.index > steps[0]].max() > 1e6 * e[steps[0]]  # then the taps shake it
+    rows, curves, _ = analyse_tapping(out, start_step=None, dt=tp.dt, period=tp.period,
+                                      amplitude=tp.amplitude, frames_per_tap=tp.frames_per_tap,
+                                      container_diameter=case["container"]["diameter"],
+                                      layer_thickness=5 * D)
+    np.testing.assert_allclose(curves.tap, tp.tap_of(tp.frame_steps))
+    v = {name: value for name, value, _ in rows}
+    assert v["taps"] == pytest.approx(2.0, abs=tp.dt / tp.period)
+    assert 0.25 < v["phi_settled"] < 0.6
+
+
+def test_free_preparation_that_does_not_settle_stops_and_resumes(free_run):
+    """A max_time before the bed settles stops the run with a one-line SettleError and a
+    checkpoint; resumed with a later max_time it writes the files of the run that was
+    never stopped, byte for byte."""
+    from pysim.protocols.tapping import SettleError
+
+    case, d = free_run
+    out = d / "short"
+    with pytest.raises(SettleError, match=r"still above protocol\.preparation\.ke_stop = 1e-08 "
+                                          r"at max_time = 0\.05; raise max_time") as exc:
+        _run(free_case(max_time=0.05), out)
+    assert "\n" not in str(exc.value) and (out / "checkpoint.npz").exists()
+    _run(case, out, resume=True)
+    for name in ("particles.dump", "contacts.dump", "thermo.dat"):
+        assert (out / name).read_bytes() == (d / "ref" / name).read_bytes(), name
+
+
+def test_free_preparation_resumes_mid_tapping(free_run, monkeypatch):
+    """Killed after the bed settled (the checkpoint holds the settled step), the resumed
+    run writes the uninterrupted run's files."""
+    from pysim.protocols.output import RunFiles
+
+    case, d = free_run
+    out = d / "killed"
+    dump = RunFiles.dump
+    calls = []
+
+    def dies_at_the_fifth_frame(self, sim):
+        calls.append(sim.state.step)
+        if len(calls) == 5:
+            raise KeyboardInterrupt
+        dump(self, sim)
+
+    monkeypatch.setattr(RunFiles, "dump", dies_at_the_fifth_frame)
+    with pytest.raises(KeyboardInterrupt):
+        _run(case, out, checkpoint_every=0.0)
+    monkeypatch.setattr(RunFiles, "dump", dump)
+    _run(case, out, resume=True)
+    for name in ("particles.dump", "contacts.dump", "thermo.dat"):
+        assert (out / name).read_bytes() == (d / "ref" / name).read_bytes(), name
+
+
+def test_kept_tangential_spring_reaches_the_tapping_kernels(tmp_path):
+    """contact.tangential_spring: keep changes a tapping run (grains and walls), reset is
+    the default's run bit for bit; friction 0 runs too, with no tangential force."""
+    from pysim.protocols.tapping import simulation_from_case
+    from workflows.case import deep_merge
+
+    from pysim import io
+    from pysim.initial import write_initial
+    from pysim.forces import KEEP_SPRING
+
+    base = validate_case(TAP)
+    write_initial(base, tmp_path / "init.data")
+    init = io.read_particle_data(tmp_path / "init.data")
+    keep = validate_case(deep_merge(TAP, {"contact": {"tangential_spring": "keep"}}))
+    reset = validate_case(deep_merge(TAP, {"contact": {"tangential_spring": "reset"}}))
+    smooth = validate_case(deep_merge(TAP, {"contact": {"friction": 0.0}}))
+    sims = {k: simulation_from_case(c, init) for k, c in
+            (("base", base), ("keep", keep), ("reset", reset), ("smooth", smooth))}
+    assert sims["keep"].model.law_id & KEEP_SPRING and not sims["base"].model.law_id & KEEP_SPRING
+    assert not sims["smooth"].model.friction and sims["smooth"].whist.shape == (0, 3)
+    for sim in sims.values():
+        sim.run(6000)  # the column lands: sliding contacts, on the base and the wall too
+    s = {k: sim.state for k, sim in sims.items()}
+    np.testing.assert_array_equal(s["reset"].x, s["base"].x)
+    assert np.abs(s["keep"].x - s["base"].x).max() > 1e-3 * D
+    assert np.abs(sims["keep"].whist).max() > np.abs(sims["base"].whist).max()
+    iw, rec = sims["smooth"].wall_contact_table()
+    assert len(iw) > 0
+    normal = np.einsum("ij,ij->i", rec[:, 7:10], rec[:, 3:6])[:, None] * rec[:, 3:6]
+    np.testing.assert_allclose(rec[:, 7:10], normal, atol=1e-12 * np.abs(rec[:, 7:10]).max())

@@ -56,7 +56,7 @@ CASES = [
      "unknown key 'contact.stiffness'; allowed here: bond_number, cohesion_range, contact_time, "
      "friction, gamma_bg, gamma_n, "
      "gamma_rot, gamma_t, k_n, k_t, law, limit_damping, max_overlap, restitution, "
-     "spine_contact, wall_friction"),
+     "spine_contact, tangential_spring, wall_friction"),
     (("protocol", "name"), "shake",
      "protocol.name = 'shake' is not allowed; use one of 'compress', 'growth', 'jammed', 'tapping', "
      "'deposit'"),

@@ -129,3 +129,7 @@ def test_set_labels_name_a_changed_tangential_law_and_the_clip():
     assert set_label(swapped).endswith("\nk_t x1.5, \u03b3_t x0.4")
     clipped = validate_case(deep_merge(TAP, {"contact": {"limit_damping": True}}))
     assert set_label(clipped).endswith("\nf_n >= 0")
+    paper = validate_case(deep_merge(TAP, {
+        "contact": {"tangential_spring": "keep"},
+        "protocol": {"preparation": {"mode": "free", "ke_stop": 1e-8, "max_time": 2.0}}}))
+    assert set_label(paper).endswith("\nspring kept, free settling")

@@ -239,3 +239,75 @@ def test_every_shipped_profile_validates(path):
 
     config = load_config(path)
     assert runs(config), f"{path.name} expands to no run"
+
+
+FREE = {"mode": "free", "ke_stop": 1e-8, "max_time": 2.0}
+
+
+def test_paper_variants_validate_and_run_on_pysim_only():
+    """contact.tangential_spring: keep and protocol.preparation.mode: free are pysim's:
+    the LAMMPS and LIGGGHTS runs of such a case are skipped with a message naming the key;
+    without them (the defaults) every engine still runs the case."""
+    from workflows.case import runs
+    from workflows.engines import supports
+
+    plain = validate_case(tap_case(), "case.yaml")
+    assert "tangential_spring" not in plain["contact"]  # absent means reset: the same case
+    assert "preparation" not in plain["protocol"]
+    keep = validate_case(tap_case(contact__tangential_spring="keep"), "case.yaml")
+    free = validate_case(tap_case(protocol__preparation=dict(FREE)), "case.yaml")
+    assert free["protocol"]["preparation"]["check_time"] == pytest.approx(0.25 / 30.0)
+    for case, key in ((keep, "contact.tangential_spring = keep"),
+                      (free, "protocol.preparation.mode = free")):
+        assert supports("pysim", case) is None
+        for engine in ("lammps", "liggghts"):
+            assert key in supports(engine, case)
+    for engine in ("pysim", "lammps"):
+        assert supports(engine, plain) is None
+    study = {"engines": ["pysim", "lammps"], "seeds": [1], "case": tap_case(seed=KeyError),
+             "variants": {"keep": {"contact": {"tangential_spring": "keep"}}, "reset": {}}}
+    skipped = []
+    got = runs(validate_config({"studies": {"s": study}}), skipped)
+    assert sorted((r.variant, r.engine) for r in got) == [
+        ("keep", "pysim"), ("reset", "lammps"), ("reset", "pysim")]
+    assert len(skipped) == 1 and "variant 'keep'" in skipped[0] and "lammps" in skipped[0]
+    assert "contact.tangential_spring = keep" in skipped[0]
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"contact__tangential_spring": "slide"},
+     r"contact\.tangential_spring = 'slide' is not allowed; use one of 'reset', 'keep'"),
+    ({"protocol__preparation": {"mode": "free", "max_time": 2.0}},
+     r"missing key 'protocol\.preparation\.ke_stop' \(required by mode free\)"),
+    ({"protocol__preparation": {"mode": "free", "ke_stop": 1e-8}},
+     r"missing key 'protocol\.preparation\.max_time'"),
+    ({"protocol__preparation": {"mode": "capped", "ke_stop": 1e-8}},
+     r"protocol\.preparation\.ke_stop is used by mode free only, not 'capped'; remove it"),
+    ({"protocol__preparation": {**FREE, "check_time": 1e-6}},
+     r"protocol\.preparation\.check_time = 1e-06 is below the time step dt = 2e-05"),
+    ({"protocol__preparation": {**FREE, "max_time": 1e-3}},
+     r"protocol\.preparation\.max_time = 0\.001 is below check_time = 0\.00833333"),
+    ({"protocol__preparation": {**FREE, "ke_stop": 0.0}},
+     r"protocol\.preparation\.ke_stop = 0\.0 is not allowed; use a number > 0"),
+    ({"protocol__preparation": {"mode": "still"}},
+     r"protocol\.preparation\.mode = 'still' is not allowed; use one of 'capped', 'free'"),
+])
+def test_bad_paper_variants(changes, message):
+    with pytest.raises(ConfigError, match=message) as exc:
+        validate_case(tap_case(**changes), "case.yaml")
+    assert "\n" not in str(exc.value)
+
+
+def test_wall_friction_alone_gets_the_derived_tangential_spring():
+    """friction 0 with wall_friction > 0: the walls need k_t and gamma_t; the schema
+    derives them from the restitution law as it does for friction (before, k_t stayed 0
+    and the walls were frictionless without a word)."""
+    case = validate_case(tap_case(contact__friction=0.0, contact__wall_friction=0.3))
+    c = case["contact"]
+    assert c["k_t"] == pytest.approx(2 / 7 * c["k_n"]) and c["gamma_t"] == pytest.approx(
+        c["gamma_n"] / 2)
+    smooth = validate_case(tap_case(contact__friction=0.0))
+    assert smooth["contact"]["k_t"] == 0.0 and smooth["contact"]["gamma_t"] == 0.0
+    with pytest.raises(ConfigError, match=r"contact\.k_t = 0\.0 must be > 0 when wall_friction "
+                                          r"= 0\.3 > 0"):
+        validate_case(with_value(("contact", "wall_friction"), 0.3), "case.yaml")

@@ -20,12 +20,14 @@ PROVENANCE = ("engine_version", "case_hash", "git_revision")
 def tap_plan(case: dict) -> dict:
     """Keyword arguments of :func:`analysis.summary.tap_curves` for a tapping case: the
     step plan of the protocol and layers of half the container diameter (the 4 mm layers
-    of the 8 mm cylinder of science.md)."""
-    from pysim.protocols.tapping import plan
+    of the 8 mm cylinder of science.md). A free preparation's tapping starts where its
+    run settled: ``start_step`` ``None``, the step of the first frame."""
+    from pysim.protocols.tapping import is_free, plan
 
-    tp = plan(case["protocol"], case["gravity"])
+    free = is_free(case["protocol"])
+    tp = plan(case["protocol"], case["gravity"], settled=0 if free else None)
     dc = case["container"]["diameter"]
-    return {"start_step": tp.start, "dt": tp.dt, "period": tp.period,
+    return {"start_step": None if free else tp.start, "dt": tp.dt, "period": tp.period,
             "amplitude": tp.amplitude, "frames_per_tap": tp.frames_per_tap,
             "container_diameter": dc, "layer_thickness": dc / 2, "n_layers": 4}
 

@@ -68,14 +68,17 @@ def paper_overlay(run_dirs, variants) -> list[dict]:
 #: what the sets figure and table show: settled and late (last eighth of the taps) state
 SET_OBSERVABLES = ["phi_settled", "phi_late", "angle_settled", "angle_late", "p2_z_late",
                    "angle_late_layer1", "angle_late_layer2", "angle_late_layer3",
-                   "angle_late_layer4", "ke_cycle", "contacts_flight"]
+                   "angle_late_layer4", "ke_cycle", "contacts_flight",
+                   "phi_settled_enclosing", "phi_late_enclosing"]
 
 
 def set_label(case: dict) -> str:
     """Tick label of a parameter set: its restitution, intensity, aspect ratio and N, and a
     third line for what else sets it apart: a tangential law other than the one the
     schema derives from the normal law (``k_t = 2/7 k_n``, ``gamma_t = gamma_n / 2``),
-    given as ratios to those, and ``f_n >= 0`` for ``contact.limit_damping``."""
+    given as ratios to those, ``f_n >= 0`` for ``contact.limit_damping``, ``spring
+    kept`` for ``contact.tangential_spring: keep`` and ``free settling`` for
+    ``protocol.preparation.mode: free``."""
     c = case["contact"]
     label = (f"e_n {c.get('restitution', float('nan')):g}, "
              f"Gamma {case['protocol']['intensity']:g}\n"
@@ -89,6 +92,10 @@ def set_label(case: dict) -> str:
             extra.append(f"k_t x{xk:.2g}, \u03b3_t x{xg:.2g}")
     if c.get("limit_damping", False):
         extra.append("f_n >= 0")
+    if c.get("tangential_spring", "reset") == "keep":
+        extra.append("spring kept")
+    if case["protocol"].get("preparation", {}).get("mode") == "free":
+        extra.append("free settling")
     return label + ("\n" + ", ".join(extra) if extra else "")
 
 
