@@ -199,3 +199,37 @@ def test_growth_box_is_checked_up_to_phi_max():
     with pytest.raises(ConfigError, match=r"^case.yaml: protocol.phi_grow = 0.5 must be below "
                                           r"phi_max = 0.45$"):
         validate_case(bad, "case.yaml")
+
+
+def cli(tmp_path, *args, env=None):
+    """``python -m pysim ARGS`` (the venv's python); the output folder is tmp_path/out."""
+    return subprocess.run([sys.executable, "-m", "pysim", *map(str, args)], capture_output=True,
+                          text=True, env=env)
+
+
+def assert_refused(r, tmp_path, start):
+    """Exit status 2, one line on stderr that starts with ``start``, nothing on stdout and
+    no output folder."""
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.startswith(start), r.stderr
+    assert r.stderr.count("\n") == 1 and "Traceback" not in r.stderr
+    assert r.stdout == ""
+    assert not (tmp_path / "out").exists()
+
+
+def good_case_file(tmp_path):
+    cp = tmp_path / "case.yaml"
+    cp.write_text(yaml.safe_dump(GOOD))
+    return cp
+
+
+@pytest.mark.parametrize("threads", [0, -1, 3])
+def test_cli_threads_out_of_range(tmp_path, threads):
+    import os
+
+    env = dict(os.environ, NUMBA_NUM_THREADS="2")
+    for cmd in (["run", good_case_file(tmp_path), "--out", tmp_path / "out"],
+                ["init", good_case_file(tmp_path), "--out", tmp_path / "out"]):
+        r = cli(tmp_path, *cmd, "--threads", threads, env=env)
+        assert_refused(r, tmp_path, f"error: --threads {threads} is not allowed; use 1 to 2 "
+                                    "(at most Numba's pool, NUMBA_NUM_THREADS")
