@@ -9,7 +9,8 @@
   pysim; results are the same bits on any number), at most Numba's pool
   (``NUMBA_NUM_THREADS``, all cores unless set).
 
-A bad case file is a one-line error and exit status 2; a run that blows up stops with a
+A bad case file, data file or option is a one-line error and exit status 2, given before
+anything is written; a run that blows up stops with a
 one-line message naming the step and particles, exit status 3, and keeps its last
 checkpoint. Ctrl-C (SIGINT) stops a run with a one-line message and exit status 130; its
 last checkpoint stays, and the same command with ``--resume`` goes on from it.
@@ -25,6 +26,8 @@ from pysim.initial import write_initial
 
 def main(argv=None) -> int:
     from workflows.case import ConfigError, load_case
+
+    from pysim.io import DataFileError
 
     ap = argparse.ArgumentParser(prog="python -m pysim", description=__doc__.split("\n\n")[0])
     common = argparse.ArgumentParser(add_help=False)
@@ -53,10 +56,11 @@ def main(argv=None) -> int:
         if args.command == "init":
             write_initial(case, args.out)
             return 0
-    except (ConfigError, UsageError) as exc:
+        init = _initial(case, args.data)
+    except (ConfigError, DataFileError, UsageError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    return _run(case, args)
+    return _run(case, init, args)
 
 
 class UsageError(ValueError):
@@ -74,11 +78,27 @@ def _use_threads(n: int) -> None:
     set_threads(n)
 
 
-def _run(case, args) -> int:
+def _initial(case: dict, data: Path | None) -> dict:
+    """The initial configuration: ``data`` (checked against the case), or the case's
+    random start when None. Raises :class:`pysim.io.DataFileError` before anything is
+    written."""
     import tempfile
 
-    import pysim
     from pysim import io
+
+    if data is None:
+        data = Path(tempfile.mkdtemp()) / "init.data"
+        write_initial(case, data)
+    init = io.read_particle_data(data)
+    if len(init["ids"]) != case["particles"]["n"]:
+        raise io.DataFileError(f"{data} holds {len(init['ids'])} particles, the case says "
+                               f"particles.n = {case['particles']['n']}; give the data file "
+                               "of this case (python -m pysim init CASE.yaml --out ...)")
+    return init
+
+
+def _run(case, init, args) -> int:
+    import pysim
     from pysim.jit import get_threads
     from pysim.protocols import compress, deposit, growth, jammed, tapping
     from pysim.protocols.output import ResumeError
@@ -86,14 +106,6 @@ def _run(case, args) -> int:
     from workflows import provenance
 
     args.out.mkdir(parents=True, exist_ok=True)
-    if args.data is None:
-        args.data = Path(tempfile.mkdtemp()) / "init.data"
-        write_initial(case, args.data)
-    init = io.read_particle_data(args.data)
-    if len(init["ids"]) != case["particles"]["n"]:
-        print(f"error: {args.data} holds {len(init['ids'])} particles, the case says "
-              f"particles.n = {case['particles']['n']}", file=sys.stderr)
-        return 2
     driver = {"compress": compress, "growth": growth, "jammed": jammed,
               "tapping": tapping, "deposit": deposit}[case["protocol"]["name"]]
     try:

@@ -101,3 +101,18 @@ def test_which_profiles_get_trends_and_sets_figures(tmp_path, profile, trends):
     rules = r.stdout + r.stderr
     assert ("plot_trends" in rules) == trends, rules[-2000:]
     assert ("plot_tapping_sets" in rules) == profile.startswith("tapping")
+
+
+def test_config_key_given_twice_stops_before_anything_runs(tmp_path):
+    """Snakemake's own loader keeps the last of a key given twice; the pipeline refuses it."""
+    text = yaml.safe_dump(tiny_config(tmp_path / "results"))
+    assert "\n        n: 200\n" in text
+    p = tmp_path / "twice.yaml"
+    p.write_text(text.replace("\n        n: 200\n", "\n        n: 200\n        n: 300\n"))
+    r = subprocess.run([SNAKEMAKE, "--snakefile", str(ROOT / "Snakefile"), "--directory",
+                        str(tmp_path), "--configfile", str(p), "--cores", "1", "--dry-run"],
+                       capture_output=True, text=True)
+    assert r.returncode != 0
+    assert "key 'n' is given twice in one mapping" in r.stderr, r.stderr[-2000:]
+    assert not (tmp_path / "results").exists()
+
