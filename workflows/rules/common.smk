@@ -1,5 +1,6 @@
 # Configuration validation, the run table and the final targets.
 import math
+from pathlib import Path
 import json
 import sys
 
