@@ -100,7 +100,7 @@ class ForceBalance(Observable):
 
     Parameters: ``split_parallel`` (default True) also solves for the placement of the
     forces of kinked parallel side-side contacts; ``kink_tol`` (:func:`kink_contacts`);
-    ``rattler_rule``, ``c_min`` as :class:`analysis.contacts.ContactNumber`.
+    ``rattler_rule``, ``c_min``, ``friction`` as :class:`analysis.contacts.ContactNumber`.
 
     Results: ``force`` (N,) ``|F_i| / <|f|>``, ``torque`` (N,) ``|tau_i| / <|f| R>``
     (rattlers NaN), their backbone means and maxima ``force_mean``, ``force_max``,
@@ -113,17 +113,18 @@ class ForceBalance(Observable):
                 "torque_split_mean", "torque_split_max", "n_kink", "mean_force", "n_backbone")
 
     def __init__(self, split_parallel: bool = True, kink_tol: float = 1.0,
-                 rattler_rule: str = "auto", c_min: int | None = None):
+                 rattler_rule: str = "auto", c_min: int | None = None, friction: float = 0.0):
         if kink_tol < 0:
             raise ValueError(f"kink_tol must be >= 0, got {kink_tol}")
         self.split_parallel, self.kink_tol = split_parallel, kink_tol
-        self.rattler_rule, self.c_min = rattler_rule, c_min
+        self.rattler_rule, self.c_min, self.friction = rattler_rule, c_min, friction
 
     def compute(self, frame: Frame, contacts: Contacts):
         if contacts is None:
             raise ValueError("ForceBalance needs a contact table with forces")
         nan = float("nan")
-        ratt = ContactNumber(self.c_min, rule=self.rattler_rule).compute(frame, contacts).rattlers
+        ratt = ContactNumber(self.c_min, rule=self.rattler_rule,
+                             friction=self.friction).compute(frame, contacts).rattlers
         keep = ~ratt
         pp, _ = split_wall_contacts(frame, contacts)
         a = frame.index_of(pp.i)

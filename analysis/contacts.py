@@ -7,9 +7,10 @@ counted on the remaining backbone, ``z = 2 N_c' / N'``. Rules (science.md sectio
 
 * ``rule="threshold"``: fewer than ``c_min`` contacts (3-D frictionless spheres
   ``c_min = d + 1 = 4``; for 3-D rods, for which science.md gives no rule, we use
-  ``d_f + 1 = 6``: see :func:`default_c_min`);
+  ``d_f + 1 = 6``; frictional grains of any shape ``c_min = d``: see
+  :func:`default_c_min`);
 * ``rule="2d"``: 0 or 1 contacts, or 2 contacts unless they lie on opposite flat sides
-  of the rod (disks have no flat side, so they need 3).
+  of the rod (disks have no flat side, so they need 3); frictionless grains only.
 
 Contact *types* classify each end of a contact as a **tip** (the closest point of the
 spine is one of its ends, the contact point projects at or beyond ``|t| = L/2``) or a
@@ -59,10 +60,33 @@ def remove_rattlers(n: int, i: np.ndarray, j: np.ndarray, c_min: int,
         alive &= ~(rattler[i] | rattler[j])
 
 
-def default_c_min(frame: Frame) -> int:
-    """Threshold rule's ``c_min`` for a frame: ``d_f + 1`` with ``d_f`` the blocked degrees
-    of freedom of one particle (3-D spheres 3 -> 4, 3-D rods 5 -> 6; 2-D disks 2 -> 3,
-    2-D rods 3 -> 4; for 2-D prefer ``rule="2d"``)."""
+def default_c_min(frame: Frame, friction: float = 0.0) -> int:
+    """Threshold rule's ``c_min`` for a frame (rattlers have fewer contacts).
+
+    Frictionless (``friction == 0``): ``d_f + 1`` with ``d_f`` the blocked degrees of
+    freedom of one particle (3-D spheres 3 -> 4, 3-D rods 5 -> 6; 2-D disks 2 -> 3, 2-D
+    rods 3 -> 4; for 2-D prefer ``rule="2d"``): normal forces only push, and ``d_f + 1``
+    of them are the fewest that can balance each other in ``d_f`` dimensions.
+
+    Frictional (``friction > 0``): ``d`` for every shape (3-D 3, 2-D 2). A contact with
+    friction carries a force anywhere in its Coulomb cone (``d`` components), and every
+    rigid-body degree of freedom of the grain is coupled, rotation about a rod's own axis
+    included: force and torque balance are ``d (d + 1) / 2`` equations. Fewer than ``d``
+    contacts cannot hold a grain: in 3-D two forces in equilibrium lie on the line through
+    their contact points and cannot resist a torque about that line; in 2-D one
+    contact carries no force at all. ``d`` contacts in general position can (two forces
+    along the chord, within their cones, in 2-D; any force and torque from three points
+    in 3-D). The threshold stays below the frictional isostatic mean ``z = d + 1``
+    (generalised isostaticity: Shundyak, van Hecke & van Saarloos, PRE 75, 010301(R),
+    2007; frictional spheres approach ``z_J = 4`` at large friction: Silbert, Soft Matter
+    6, 2918, 2010), as the frictionless ``d_f + 1`` stays below ``2 d_f``: a threshold of
+    ``d + 1`` strips packings near that mean (measured in docs/analysis.md). For rods
+    the same counting holds (the papers of this project give no rattler rule for
+    frictional spherocylinders). ``analysis.c_min`` in a study's configuration overrides
+    the rule.
+    """
+    if friction > 0:
+        return frame.dim
     rods = bool(np.any(frame.length > 0))
     d_f = {(3, False): 3, (3, True): 5, (2, False): 2, (2, True): 3}[(frame.dim, rods)]
     return d_f + 1
@@ -167,9 +191,11 @@ class ContactNumber(Observable):
     """Contact numbers of one frame, with and without rattlers.
 
     Parameters: ``rule`` ``"threshold"`` (fewer than ``c_min`` contacts), ``"2d"``
-    (science.md's 2-D rule) or ``"auto"`` (the default: ``"2d"`` for 2-D frames unless
-    ``c_min`` is given, otherwise the threshold with ``c_min``, by default
-    :func:`default_c_min`: 4 for 3-D spheres, 6 for 3-D rods);
+    (science.md's 2-D rule) or ``"auto"`` (the default: ``"2d"`` for frictionless 2-D
+    frames unless ``c_min`` is given, otherwise the threshold with ``c_min``, by default
+    :func:`default_c_min`: 4 for frictionless 3-D spheres, 6 for frictionless 3-D rods,
+    ``d`` for frictional grains); ``friction``: the packing's Coulomb coefficient ``mu``
+    (the case's ``contact.friction``), which picks the default rule;
     ``double_parallel``: count parallel side-side contacts as two bonds in ``z_bonds``
     (default: in 2-D frames only); ``tol``, ``angle_tol`` of the tip and parallel tests.
 
@@ -185,13 +211,31 @@ class ContactNumber(Observable):
                 "z_bonds", "distribution", "distribution_rattler_free")
 
     def __init__(self, c_min: int | None = None, rule: str = "auto",
-                 double_parallel: bool | None = None, tol: float = 1e-6, angle_tol: float = 1e-6):
+                 double_parallel: bool | None = None, tol: float = 1e-6, angle_tol: float = 1e-6,
+                 friction: float = 0.0):
         if c_min is not None and c_min < 0:
             raise ValueError(f"c_min must be >= 0, got {c_min}")
         if rule not in ("threshold", "2d", "auto"):
             raise ValueError(f"rule must be 'auto', 'threshold' or '2d', got {rule!r}")
+        if not friction >= 0:
+            raise ValueError(f"friction must be a number >= 0, got {friction}")
         self.c_min, self.rule, self.double_parallel = c_min, rule, double_parallel
-        self.tol, self.angle_tol = tol, angle_tol
+        self.tol, self.angle_tol, self.friction = tol, angle_tol, float(friction)
+
+    def describe(self, frame: Frame) -> str:
+        """The rattler rule this observable applies to ``frame``, in words (for messages)."""
+        if self._rule(frame) == "2d":
+            return "the 2-D rule (0 or 1 contacts, or 2 not on opposite flat sides)"
+        return f"fewer than {self._c_min(frame)} contacts"
+
+    def _rule(self, frame: Frame) -> str:
+        if self.rule != "auto":
+            return self.rule
+        frictionless_2d = frame.dim == 2 and self.c_min is None and self.friction == 0
+        return "2d" if frictionless_2d else "threshold"
+
+    def _c_min(self, frame: Frame) -> int:
+        return default_c_min(frame, self.friction) if self.c_min is None else self.c_min
 
     def compute(self, frame: Frame, contacts: Contacts):
         if contacts is None:
@@ -202,14 +246,10 @@ class ContactNumber(Observable):
         b = frame.index_of(pp.j)
         fixed = np.bincount(frame.index_of(walls.i), minlength=n)
         c = contact_counts(n, a, b) + fixed
-        rule = self.rule
-        if rule == "auto":
-            rule = "2d" if frame.dim == 2 and self.c_min is None else "threshold"
-        if rule == "2d":
+        if self._rule(frame) == "2d":
             ratt = remove_rattlers_2d(frame, contacts, self.tol)
         else:
-            c_min = default_c_min(frame) if self.c_min is None else self.c_min
-            ratt = remove_rattlers(n, a, b, c_min, fixed)
+            ratt = remove_rattlers(n, a, b, self._c_min(frame), fixed)
         keep = ~(ratt[a] | ratt[b])
         keep_w = ~ratt[frame.index_of(walls.i)]
         n_bb = int(np.count_nonzero(~ratt))

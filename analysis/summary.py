@@ -3,12 +3,15 @@
 ``analyse_compression`` reads a run directory in the common format and returns
 
 * observables: ``phi_j`` (with its fit error), ``jamming_slope`` (``dp/dphi`` of the
-  fit), ``z_j`` (rattler-free contact number
-  at the first frame at or above ``phi_J`` that keeps a backbone: a frame whose rattler
-  removal empties it has not jammed yet), ``z_j_with_rattlers``,
-  ``rattler_fraction_j``, ``phi_at_z_j``, ``phi_final``, ``pressure_final``;
+  fit), ``z_j`` (rattler-free contact number at ``phi_J``, extrapolated from the frames
+  just above it: :func:`z_at_jamming`), ``z_j_with_rattlers``, ``rattler_fraction_j``,
+  ``phi_at_z_j`` (``phi_J``, or the frame's packing fraction where only one frame could
+  be used), ``z_j_frames``, ``phi_final``, ``pressure_final``;
 * curves: per output frame, ``phi``, contact ``pressure`` (from the contact table),
   ``z``, ``z_rattler_free``, ``n_rattlers`` and the thermo ``p(phi)``.
+
+:func:`problems` words what a reader of the numbers must know: NaN observables, frames
+whose rattler removal empties the packing.
 """
 from __future__ import annotations
 
@@ -30,15 +33,19 @@ TIDY_COLUMNS = ["study", "case", "engine", "seed", "observable", "value", "uncer
 STRESS_COLUMNS = {2: 4, 3: 2}
 
 
-def frame_curves(run: RunData, c_min: int | None = None) -> pd.DataFrame:
+def frame_curves(run: RunData, c_min: int | None = None, friction: float = 0.0) -> pd.DataFrame:
     """Per output frame: ``phi``, contact ``pressure`` (from the contact table), ``z``,
     ``z_rattler_free``, ``z_bonds`` (2-D: parallel side contacts twice), ``n_rattlers``,
     and for rods the nematic order ``s_nematic`` (3-D) or ``sqrt(N) S_2``, ``sqrt(N) S_4``
-    (2-D). Rattlers follow science.md's rule for
-    the frame (:class:`analysis.contacts.ContactNumber`, ``c_min`` overrides it)."""
+    (2-D). Rattlers follow the rule for the frame and the packing's ``friction``
+    (:class:`analysis.contacts.ContactNumber`, ``c_min`` overrides it); the rule in words
+    is ``attrs["rattler_rule"]``."""
     rows = []
+    rule = ""
     for frame, contacts in run.frames():
-        cn = ContactNumber(c_min).compute(frame, contacts)
+        counter = ContactNumber(c_min, friction=friction)
+        rule = counter.describe(frame)
+        cn = counter.compute(frame, contacts)
         row = {"step": frame.step, "phi": packing_fraction(frame),
                "pressure": pressure(frame, contacts, dim=frame.dim), "z": cn.z,
                "z_rattler_free": cn.z_rattler_free, "z_bonds": cn.z_bonds,
@@ -53,24 +60,129 @@ def frame_curves(run: RunData, c_min: int | None = None) -> pd.DataFrame:
             else:
                 row["s_nematic"] = NematicOrder().compute(frame).S
         rows.append(row)
-    return pd.DataFrame(rows)
+    curves = pd.DataFrame(rows)
+    curves.attrs["rattler_rule"] = rule
+    return curves
+
+
+#: frames above the jamming point whose contact numbers are extrapolated to it
+#: (:func:`z_at_jamming`): the fewest that give the line an error
+JAMMED_FRAMES = 3
+#: observables read at the jamming point of a compression (:func:`z_at_jamming`)
+JAMMED_NAMES = ("z_j", "z_j_bonds", "z_j_with_rattlers", "rattler_fraction_j", "phi_at_z_j",
+                "s_nematic_j", "z_j_frames")
+
+
+def z_at_jamming(curves: pd.DataFrame, phi_j: float, p_max: float) -> dict:
+    """Contact numbers of a compression at its jamming point ``phi_J`` (the ``p -> 0``
+    limit), from its frames (:func:`frame_curves`): ``{name: (value, uncertainty)}`` for
+    :data:`JAMMED_NAMES`.
+
+    The frames used are the first :data:`JAMMED_FRAMES` at or above ``phi_J`` that keep a
+    rattler-free backbone and whose contact pressure is at most ``p_max`` (the top of the
+    jamming-fit window: the first rise, where ``phi_J`` was fitted), and at least the
+    first two such frames (a local line: further up, ``z(phi)`` bends).
+    From two or more, ``z_j``, ``z_j_bonds`` and ``rattler_fraction_j`` are the
+    least-squares line through them in ``phi`` at ``phi_J``, as ``phi_J`` is the line
+    ``p(phi)`` of the same rise at ``p = 0`` (with the standard error of the intercept
+    from three frames on; the fraction clipped to [0, 1]); ``phi_at_z_j = phi_J``. With
+    one frame, that frame's values at its own ``phi_at_z_j``; with none, NaN.
+    ``z_j_with_rattlers`` and ``s_nematic_j``, which every frame has, are interpolated
+    linearly at ``phi_J``. ``z_j_frames``: the frames used. Below ``phi_J`` the packing
+    flows: the limit is taken from above. (The first frame above ``phi_J`` that keeps a
+    backbone, read as it is, may lie far above jamming and overstate ``z_J``:
+    docs/analysis.md.)
+    """
+    nan = (np.nan, np.nan)
+    out = {name: nan for name in JAMMED_NAMES}
+    if not np.isfinite(phi_j) or not len(curves):
+        return out
+    c = curves.sort_values("phi", kind="stable")
+    for name, col in (("z_j_with_rattlers", "z"), ("s_nematic_j", "s_nematic")):
+        v = c[col].to_numpy(dtype=float)
+        ok = np.isfinite(v)
+        if ok.any() and c.phi[ok].min() <= phi_j <= c.phi[ok].max():
+            out[name] = (float(np.interp(phi_j, c.phi[ok], v[ok])), np.nan)
+    above = c[(c.phi >= phi_j) & (c.n_rattlers < c.n)]
+    use = above[above.pressure <= p_max].iloc[:JAMMED_FRAMES]
+    if len(use) < 2:
+        use = above.iloc[:2]
+    out["z_j_frames"] = (float(len(use)), np.nan)
+    if len(use) == 0:
+        return out
+    if len(use) == 1:
+        first = use.iloc[0]
+        out.update(z_j=(float(first.z_rattler_free), np.nan),
+                   z_j_bonds=(float(first.z_bonds), np.nan),
+                   rattler_fraction_j=(float(first.n_rattlers / first.n), np.nan),
+                   phi_at_z_j=(float(first.phi), np.nan))
+        return out
+    dphi = use.phi.to_numpy() - phi_j
+    for name, col in (("z_j", "z_rattler_free"), ("z_j_bonds", "z_bonds")):
+        out[name] = _intercept(dphi, use[col].to_numpy(dtype=float))
+    frac = use.n_rattlers.to_numpy() / use.n.to_numpy()
+    out["rattler_fraction_j"] = (float(np.clip(_intercept(dphi, frac)[0], 0.0, 1.0)), np.nan)
+    out["phi_at_z_j"] = (float(phi_j), np.nan)
+    return out
+
+
+def _intercept(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+    """``a`` of the least-squares line ``y = a + b x`` and its standard error (NaN from
+    fewer than three points)."""
+    design = np.column_stack([np.ones_like(x), x])
+    coef, *_ = np.linalg.lstsq(design, y, rcond=None)
+    if len(x) < 3:
+        return float(coef[0]), np.nan
+    resid = y - design @ coef
+    cov = np.linalg.pinv(design.T @ design) * float(resid @ resid) / (len(x) - 2)
+    return float(coef[0]), float(np.sqrt(cov[0, 0]))
+
+
+def problems(rows, curves: pd.DataFrame | None = None) -> list[str]:
+    """One-line warnings a reader of a run's observables must see: the observables that
+    are NaN (the nematic order of spheres, which have none, aside), and the frames at or
+    above the jamming point (all frames when there is none) in which every grain is a
+    rattler (the rule, ``curves.attrs["rattler_rule"]``, removed the whole packing)."""
+    values = {name: v for name, v, _err in rows}
+    out = []
+    no_rods = (curves is not None and "s_nematic" in curves
+               and not np.isfinite(curves["s_nematic"].to_numpy(dtype=float)).any())
+    bad = [name for name, v in values.items() if isinstance(v, (int, float, np.floating))
+           and not np.isfinite(v) and not (no_rods and name.startswith("s_nematic"))]
+    if bad:
+        out.append(f"observable{'s' if len(bad) > 1 else ''} {', '.join(bad)} "
+                   f"{'are' if len(bad) > 1 else 'is'} NaN")
+    if curves is None or not {"n_rattlers", "n", "phi"} <= set(curves.columns) or not len(curves):
+        return out
+    phi_j = values.get("phi_j", np.nan)
+    at = curves[curves.phi >= phi_j] if np.isfinite(phi_j) else curves
+    where = f"at or above phi_j = {phi_j:.4g}" if np.isfinite(phi_j) else "of the run"
+    empty = at[(at.n_rattlers >= at.n) & (at.n > 0)]
+    if len(empty):
+        rule = curves.attrs.get("rattler_rule") or "the rattler rule"
+        out.append(f"every grain is a rattler ({rule}) in {len(empty)} of the {len(at)} frames "
+                   f"{where} (phi {empty.phi.min():.4g} to {empty.phi.max():.4g}); set "
+                   "analysis.c_min in the study's configuration if the rule does not fit "
+                   "these grains")
+    return out
 
 
 def analyse_compression(run_dir, window, p_scale: float, c_min: int | None = None,
-                        fit_from: float | None = None):
+                        fit_from: float | None = None, friction: float = 0.0):
     """Observables ``[(name, value, uncertainty)]`` and per-frame curves of one
     compression run.
 
     ``window`` is the jamming-fit pressure window in units of ``p_scale`` (``k_n/D``);
-    ``c_min`` overrides the rattler rule (default: science.md's rule for the frame);
+    ``c_min`` overrides the rattler rule (default: the rule for the frame and the
+    packing's ``friction``, :func:`analysis.contacts.default_c_min`);
     ``fit_from``: only thermo rows from the first with ``phi >= fit_from`` on are fitted
     (the slow stage of a two-stage compression: the fast stage's transient pressure is
-    not a jamming rise).
+    not a jamming rise). The contact numbers at jamming: :func:`z_at_jamming`.
     """
     run = RunData(run_dir)
     thermo = run.thermo
     rows = []
-    curves = frame_curves(run, c_min)
+    curves = frame_curves(run, c_min, friction)
     first = 0
     if fit_from is not None:
         reached = np.flatnonzero(thermo.phi.to_numpy() >= fit_from)
@@ -83,29 +195,15 @@ def analyse_compression(run_dir, window, p_scale: float, c_min: int | None = Non
     except JammingFitError as exc:
         phi_j, phi_j_err, slope, fit = np.nan, np.nan, np.nan, {"error": str(exc)}
     rows += [("phi_j", phi_j, phi_j_err), ("jamming_slope", slope, np.nan)]
-    # the fit extrapolates a dynamic pressure: the first frame above phi_J may still have
-    # no rigid backbone (every particle a rattler), and its z_rattler_free = 0 is no z_J
-    above = (curves[(curves.phi >= phi_j) & (curves.n_rattlers < curves.n)]
-             if np.isfinite(phi_j) else curves.iloc[0:0])
-    if len(above):
-        first = above.iloc[0]
-        rows += [("z_j", first.z_rattler_free, np.nan),
-                 ("z_j_bonds", first.z_bonds, np.nan),
-                 ("z_j_with_rattlers", first.z, np.nan),
-                 ("rattler_fraction_j", first.n_rattlers / first.n, np.nan),
-                 ("phi_at_z_j", first.phi, np.nan),
-                 ("s_nematic_j", first.s_nematic, np.nan)]
-    else:
-        rows += [(k, np.nan, np.nan) for k in
-                 ("z_j", "z_j_bonds", "z_j_with_rattlers", "rattler_fraction_j", "phi_at_z_j",
-                  "s_nematic_j")]
+    at_j = z_at_jamming(curves, phi_j, window[1] * p_scale)
+    rows += [(name, *at_j[name]) for name in JAMMED_NAMES]
     last = thermo.iloc[-1]
     rows += [("phi_final", float(last.phi), np.nan), ("pressure_final", float(last.pressure), np.nan)]
     curves.attrs["fit"] = fit
     return rows, curves, thermo
 
 
-def analyse_growth(run_dir, c_min: int | None = None):
+def analyse_growth(run_dir, c_min: int | None = None, friction: float = 0.0):
     """Observables and curves of a growth-to-jamming run (pysim's ``cycles.dat``).
 
     ``phi_j`` is the first jammed packing fraction of the bisection and its uncertainty
@@ -122,7 +220,7 @@ def analyse_growth(run_dir, c_min: int | None = None):
     cycles = pd.read_csv(Path(run_dir) / "cycles.dat", sep=r"\s+", comment="#", header=None,
                          names=["step", "phi", "e", "p", "nc", "jammed", "iterations",
                                 "residual", "settled"])  # the last three since 2026-11-24
-    curves = frame_curves(run, c_min)
+    curves = frame_curves(run, c_min, friction)
     curves["relaxed"] = curves.step.isin(cycles.step)
     curves["jammed"] = curves.step.isin(cycles.step[cycles.jammed == 1])
     jam = cycles[cycles.jammed == 1]
@@ -158,7 +256,8 @@ def tidy(rows, study, case, engine, seed, parameters: dict | None = None) -> pd.
     return df
 
 
-def analyse_jammed(run_dir, c_min: int | None = None, energy_target: float | None = None):
+def analyse_jammed(run_dir, c_min: int | None = None, energy_target: float | None = None,
+                   friction: float = 0.0):
     """Observables of a mechanically stable packing (pysim's ``jammed`` protocol).
 
     ``phi_j`` comes from ``jammed.json``; the residual forces and torques of the
@@ -184,8 +283,8 @@ def analyse_jammed(run_dir, c_min: int | None = None, energy_target: float | Non
     run = RunData(run_dir)
     res = json.loads((Path(run_dir) / "jammed.json").read_text())
     frame, contacts = run.frames()[-1]
-    cn = ContactNumber(c_min).compute(frame, contacts)
-    bal = ForceBalance(c_min=c_min).compute(frame, contacts)
+    cn = ContactNumber(c_min, friction=friction).compute(frame, contacts)
+    bal = ForceBalance(c_min=c_min, friction=friction).compute(frame, contacts)
     rows = [("phi_j", res["phi_j"], np.nan), ("energy_density", res["energy_density"], np.nan),
             ("z_j", cn.z_rattler_free, np.nan), ("z_j_bonds", cn.z_bonds, np.nan),
             ("z_j_with_rattlers", cn.z, np.nan),
@@ -210,7 +309,7 @@ def analyse_jammed(run_dir, c_min: int | None = None, energy_target: float | Non
                      ("sqrt_n_s2", order.sqrtN_S2, np.nan), ("sqrt_n_s4", order.sqrtN_S4, np.nan)]
         else:
             rows.append(("s_nematic", NematicOrder().compute(frame).S, np.nan))
-    curves = frame_curves(run, c_min)
+    curves = frame_curves(run, c_min, friction)
     return rows, curves, run.thermo
 
 
@@ -589,7 +688,8 @@ def _settled_layer(frame, pairs, fixed, lo: float, hi: float, c_min: int) -> dic
             "p2_z": order.gravity_order if order is not None else np.nan}
 
 
-def analyse_settled(run_dir, margins, floor: float = 0.0, c_min: int | None = None):
+def analyse_settled(run_dir, margins, floor: float = 0.0, c_min: int | None = None,
+                    friction: float = 0.0):
     """Observables of a jammed bed settled under gravity (LIGGGHTS' substitute for the
     compression of rods, ``inputs/liggghts/in.rods.settle``), from its last frame, in the
     bulk window of :func:`settled_window` (``margins`` in particle lengths above the floor
@@ -629,7 +729,7 @@ def analyse_settled(run_dir, margins, floor: float = 0.0, c_min: int | None = No
     lo, hi, top = settled_window(frame, margins, floor)
     ell = float(np.max(frame.length + 2.0 * frame.radius))
     pairs, fixed = settled_pairs(frame, contacts)
-    c_min = default_c_min(frame) if c_min is None else c_min
+    c_min = default_c_min(frame, friction) if c_min is None else c_min
     bulk = _settled_layer(frame, pairs, fixed, lo, hi, c_min)
     k = max(int(np.floor((hi - lo) / ell)), 1)
     slab_edges = np.linspace(lo, hi, k + 1)

@@ -199,30 +199,50 @@ def write_rod_data(path, x, axis, radius, length, box, density, dimension=3,
     atomic_write_text(path, "\n".join(lines) + "\n")
 
 
+class DataFileError(ValueError):
+    """An initial-configuration file cannot be read; the message is one line that names the
+    file and what a valid one holds."""
+
+
+#: what :func:`read_particle_data` reads, for its error messages
+DATA_FILE_HINT = ("a LAMMPS data file of atom_style sphere or ellipsoid, as python -m pysim "
+                  "init writes")
+
+
 def _sections(path):
     """Header values and named sections (lists of number rows) of a LAMMPS data file."""
     header = {}
     sections = {}
     current = None
-    with open(path) as fh:
-        for lineno, raw in enumerate(fh, 1):
-            line = raw.split("#")[0].strip()
-            if not line:
-                continue
-            word = line.split()[0]
-            if word[0].isalpha():
-                current = word
-                sections[current] = []
-                continue
-            if current is None:
-                parts = line.split()
-                key = " ".join(p for p in parts if not _is_number(p))
-                header[key] = [float(p) for p in parts if _is_number(p)]
-            else:
-                try:
-                    sections[current].append([float(v) for v in line.split()])
-                except ValueError:
-                    raise ValueError(f"{path}:{lineno}: not a number in {raw.strip()!r}") from None
+    try:
+        with open(path) as fh:
+            for lineno, raw in enumerate(fh, 1):
+                line = raw.split("#")[0].strip()
+                if not line:
+                    continue
+                word = line.split()[0]
+                if word[0].isalpha():
+                    current = word
+                    sections[current] = []
+                    continue
+                if current is None:
+                    parts = line.split()
+                    key = " ".join(p for p in parts if not _is_number(p))
+                    header[key] = [float(p) for p in parts if _is_number(p)]
+                else:
+                    try:
+                        sections[current].append([float(v) for v in line.split()])
+                    except ValueError:
+                        raise DataFileError(f"{path}:{lineno}: not a number in "
+                                            f"{raw.strip()!r}; the {current} section holds "
+                                            "numbers only") from None
+    except FileNotFoundError:
+        raise DataFileError(f"{path}: no such file; give {DATA_FILE_HINT}") from None
+    except UnicodeDecodeError:
+        raise DataFileError(f"{path}: not a text file; give {DATA_FILE_HINT}") from None
+    except OSError as exc:
+        raise DataFileError(f"{path}: cannot be read ({exc.strerror}); give "
+                            f"{DATA_FILE_HINT}") from None
     return header, sections
 
 
@@ -245,26 +265,47 @@ def read_particle_data(path) -> dict:
     from pysim.rotation import axes
 
     header, sections = _sections(path)
-    n = int(header.get("atoms", [0])[0])
-    atoms = np.array(sections.get("Atoms", []))
-    if len(atoms) != n or n == 0:
-        raise ValueError(f"{path}: header says {n} atoms, found {len(atoms)} atom lines")
-    lo = np.array([header[f"{a}lo {a}hi"][0] for a in "xyz"])
-    hi = np.array([header[f"{a}lo {a}hi"][1] for a in "xyz"])
+    count = header.get("atoms", [])
+    if len(count) != 1 or count[0] != int(count[0]) or count[0] < 1:
+        raise DataFileError(f"{path}: not a LAMMPS data file (no 'N atoms' line with N >= 1 in "
+                            f"its header); give {DATA_FILE_HINT}")
+    n = int(count[0])
+    rows = sections.get("Atoms", [])
+    if len(rows) != n:
+        raise DataFileError(f"{path}: the header says {n} atoms, the Atoms section has "
+                            f"{len(rows)} lines; give {DATA_FILE_HINT}")
+    if min(len(r) for r in rows) < 7:
+        raise DataFileError(f"{path}: an Atoms line has {min(len(r) for r in rows)} columns; "
+                            "atom_style sphere and ellipsoid lines have 7 or more (id type "
+                            "diameter-or-flag density x y z)")
+    atoms = np.array([r[:7] for r in rows])
+    box = [header.get(f"{a}lo {a}hi", []) for a in "xyz"]
+    if any(len(b) != 2 or not b[1] > b[0] for b in box):
+        raise DataFileError(f"{path}: the header needs the box, lines 'lo hi xlo xhi', "
+                            "'lo hi ylo yhi' and 'lo hi zlo zhi' with lo < hi")
+    lo = np.array([b[0] for b in box])
+    hi = np.array([b[1] for b in box])
+    if not (np.all(np.isfinite(atoms)) and np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+        raise DataFileError(f"{path}: holds a value that is not finite (nan or inf); every "
+                            "number of a data file must be finite")
     atoms = atoms[np.argsort(atoms[:, 0])]
     ids = atoms[:, 0].astype(np.int64)
     v = np.zeros((n, 3))
+    for name, cols, what in (("Velocities", 4, "id vx vy vz"),
+                             ("Ellipsoids", 8, "id D D L+D qw qx qy qz")):
+        if any(len(r) < cols for r in sections.get(name, [])):
+            raise DataFileError(f"{path}: a {name} line has fewer than {cols} columns ({what})")
     if "Velocities" in sections:
-        vel = np.array(sections["Velocities"])
+        vel = np.array([r[:4] for r in sections["Velocities"]])
         vel = vel[np.argsort(vel[:, 0])]
         if len(vel) != n or not np.array_equal(vel[:, 0].astype(np.int64), ids):
-            raise ValueError(f"{path}: the Velocities section must list every atom once")
+            raise DataFileError(f"{path}: the Velocities section must list every atom once")
         v = vel[:, 1:4].copy()
     if "Ellipsoids" in sections:
-        ell = np.array(sections["Ellipsoids"])
+        ell = np.array([r[:8] for r in sections["Ellipsoids"]])
         ell = ell[np.argsort(ell[:, 0])]
         if len(ell) != n or not np.array_equal(ell[:, 0].astype(np.int64), ids):
-            raise ValueError(f"{path}: the Ellipsoids section must list every atom once")
+            raise DataFileError(f"{path}: the Ellipsoids section must list every atom once")
         radius = ell[:, 1] / 2.0
         length = ell[:, 3] - ell[:, 1]
         q = np.ascontiguousarray(ell[:, 4:8])

@@ -13,8 +13,10 @@ argument costs two atomic reference-count updates per call, more than a contact 
 Threads never change results: every parallel loop either writes only to the particle or
 pair it owns, or reduces over fixed blocks whose partial sums are added in block order
 (see :mod:`pysim.contacts`; on one thread the contact pass adds the reactions itself, in
-the order the threaded gather uses), so 1 and 2 threads give the same bits. The number of
-threads is Numba's (``NUMBA_NUM_THREADS``, default: all cores; :func:`set_threads`).
+the order the threaded gather uses), so 1 and 2 threads give the same bits. The kernels
+run on :func:`set_threads` threads, at most ``NUMBA_NUM_THREADS`` (Numba's pool: all cores
+unless set; :func:`max_threads`); Numba's default is the whole pool, the CLI's
+(``python -m pysim run --threads N``) is 1, as in the pipeline.
 
 One hint beyond Numba's own: :func:`prefetch_write` (``llvm.prefetch``), for the rod pass's
 scattered updates (see :func:`pysim.contacts._rod_select`).
@@ -147,9 +149,20 @@ irregularly and some loop after the next one updates. An intrinsic: its code is 
 in place, so the array argument costs no call and no reference counting."""
 
 
+def max_threads() -> int:
+    """Size of Numba's thread pool (``NUMBA_NUM_THREADS``, all cores unless set): the most
+    threads :func:`set_threads` accepts."""
+    return int(numba.config.NUMBA_NUM_THREADS)
+
+
 def set_threads(n: int) -> None:
-    """Use ``n`` threads in the parallel kernels (at most ``NUMBA_NUM_THREADS``)."""
-    numba.set_num_threads(int(n))
+    """Use ``n`` threads in the parallel kernels, ``1 <= n <=`` :func:`max_threads`; starts
+    the pool (on OpenMP: this module's import set the layer priority first)."""
+    n = int(n)
+    if not 1 <= n <= max_threads():
+        raise ValueError(f"threads = {n} is not allowed; use 1 to {max_threads()} (the size of "
+                         "Numba's pool, NUMBA_NUM_THREADS)")
+    numba.set_num_threads(n)
 
 
 def get_threads() -> int:

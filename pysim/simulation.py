@@ -16,6 +16,7 @@ Rods drop under gravity onto a frictional floor::
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -43,9 +44,11 @@ class ContactModel:
     * wall contacts use ``k_n``, ``gamma_n``, ``k_t``, ``gamma_t`` with ``mu_wall``
       (default ``mu``) and no cohesion.
     * ``spine_contact``: ``"closest"`` (science.md section 2: one contact at the closest
-      points of the spines) or ``"end_bonds"`` (frictionless rods: one bond from each
-      spine end to the other spine, :func:`pysim.contacts.end_bond`; a smooth energy
-      where the closest-point law has a kink at parallel side contacts).
+      points of the spines) or ``"end_bonds"`` (frictionless, cohesionless 2-D rods: one
+      bond from each spine end to the other spine, :func:`pysim.contacts.end_bond`; a
+      smooth energy where the closest-point law has a kink at parallel side contacts;
+      :class:`Simulation` refuses it for a 3-D state, :meth:`check_dimension`).
+    * every parameter is a finite number (NaN would pass a ``>= 0`` test and run).
     * ``limit_damping``: clip every contact's normal force (grains and walls) at zero, so
       that the damping never pulls (LAMMPS' ``limit_damping``); off by default, as in
       science.md's law.
@@ -79,16 +82,26 @@ class ContactModel:
         if self.tangential_spring not in ("reset", "keep"):
             raise ValueError(f"unknown tangential_spring {self.tangential_spring!r}; valid: "
                              "'reset', 'keep'")
+        if not (math.isfinite(self.k_n) and self.k_n > 0):
+            raise ValueError(f"k_n = {self.k_n} is not allowed; use a finite number > 0")
+        for name in ("gamma_n", "k_t", "gamma_t", "mu", "f_coh", "d_coh", "gamma_bg", "gamma_rot",
+                     "mu_wall"):
+            value = getattr(self, name)
+            if value is not None and not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} = {value} is not allowed; use a finite number >= 0")
         if self.spine_contact == "end_bonds" and (self.mu > 0 or self.f_coh > 0):
             raise ValueError("spine_contact 'end_bonds' is frictionless and cohesionless "
-                             f"(got mu = {self.mu}, f_coh = {self.f_coh})")
-        if not self.k_n > 0:
-            raise ValueError(f"k_n must be > 0, got {self.k_n}")
-        for name in ("gamma_n", "k_t", "gamma_t", "mu", "f_coh", "d_coh", "gamma_bg", "gamma_rot"):
-            if getattr(self, name) < 0:
-                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
+                             f"(got mu = {self.mu}, f_coh = {self.f_coh}); use mu = 0 and "
+                             "f_coh = 0, or spine_contact 'closest'")
         if self.f_coh > 0 and not self.d_coh > 0:
             raise ValueError(f"cohesion f_coh = {self.f_coh} needs a range d_coh > 0")
+
+    def check_dimension(self, dimension: int) -> None:
+        """Raise ValueError when the model cannot run in ``dimension`` (2 or 3): the end
+        bonds are a 2-D law (:func:`pysim.contacts.end_bond`; the case schema's rule)."""
+        if self.spine_contact == "end_bonds" and dimension != 2:
+            raise ValueError(f"spine_contact 'end_bonds' is a 2-D law, and this state is "
+                             f"{dimension}-D; use spine_contact 'closest' in 3-D")
 
     @property
     def law_id(self) -> int:
@@ -154,6 +167,7 @@ class Simulation:
                  check_dt: bool = True):
         if not dt > 0:
             raise ValueError(f"dt must be > 0, got {dt}")
+        model.check_dimension(state.dimension)
         self.state = state
         self.model = model
         self._dt = float(dt)

@@ -49,9 +49,33 @@ class ConfigError(ValueError):
     """A configuration or case file is invalid; the message is one line."""
 
 
+class DuplicateKeyError(yaml.constructor.ConstructorError):
+    """A mapping of a YAML file gives the same key twice (plain YAML loaders keep the last
+    silently)."""
+
+
 class _Loader(yaml.SafeLoader):
     """YAML loader that reads ``1e5`` and ``1.0e-3`` as numbers (plain YAML 1.1 would
-    read ``1.0e5`` as a string)."""
+    read ``1.0e5`` as a string) and refuses a key given twice in one mapping (merge keys
+    ``<<`` may still be overridden, as YAML intends)."""
+
+    def construct_mapping(self, node, deep=False):
+        if isinstance(node, yaml.MappingNode):
+            first = {}
+            for key_node, _value in node.value:
+                if key_node.tag == "tag:yaml.org,2002:merge":
+                    continue
+                key = self.construct_object(key_node, deep=True)
+                line = key_node.start_mark.line + 1
+                try:
+                    if key in first:
+                        raise DuplicateKeyError(
+                            None, None, f"key {key!r} is given twice in one mapping (lines "
+                            f"{first[key]} and {line}); keep one", key_node.start_mark)
+                    first[key] = line
+                except TypeError:
+                    continue  # an unhashable key: SafeLoader reports it itself
+        return super().construct_mapping(node, deep=deep)
 
 
 _FLOAT_RE = re.compile(r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
@@ -70,7 +94,10 @@ def coerce_numbers(obj):
     if isinstance(obj, list):
         return [coerce_numbers(v) for v in obj]
     if isinstance(obj, str) and _FLOAT_RE.match(obj.strip()) and obj.strip()[:1] != ".":
-        return float(obj)
+        try:
+            return float(obj)
+        except ValueError:  # "-.inf": YAML's spelling, not Python's
+            return obj
     return obj
 
 
@@ -82,6 +109,8 @@ def read_yaml(path):
             return yaml.load(fh, Loader=_Loader)
     except FileNotFoundError:
         raise ConfigError(f"{path}: no such file") from None
+    except DuplicateKeyError as exc:
+        raise ConfigError(f"{path}:{exc.problem_mark.line + 1}: {exc.problem}") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f":{mark.line + 1}" if mark else ""
@@ -105,30 +134,48 @@ def _with_defaults(validator_class):
                     instance[prop] = copy.deepcopy(sub["default"])
         yield from validate_properties(validator, properties, instance, schema)
 
-    return jsonschema.validators.extend(validator_class, {"properties": set_defaults})
+    base_types = validator_class.TYPE_CHECKER
+
+    def finite_number(checker, instance):
+        # NaN passes every minimum and maximum (each comparison is false) and inf every
+        # minimum: a number in a case or configuration must be finite
+        return base_types.is_type(instance, "number") and (
+            not isinstance(instance, float) or math.isfinite(instance))
+
+    return jsonschema.validators.extend(validator_class, {"properties": set_defaults},
+                                        type_checker=base_types.redefine("number", finite_number))
 
 
 _Validator = _with_defaults(jsonschema.Draft202012Validator)
 
 
+def _bounds(s: dict) -> str:
+    """The bounds of a number schema, ``">= 0 and <= 10"`` (empty without bounds)."""
+    parts = []
+    if "minimum" in s:
+        parts.append(f">= {s['minimum']}")
+    if "exclusiveMinimum" in s:
+        parts.append(f"> {s['exclusiveMinimum']}")
+    if "maximum" in s:
+        parts.append(f"<= {s['maximum']}")
+    if "exclusiveMaximum" in s:
+        parts.append(f"< {s['exclusiveMaximum']}")
+    return " and ".join(parts)
+
+
 def _allowed(error) -> str:
     s = error.schema
     v = error.validator
+    if isinstance(error.instance, float) and not math.isfinite(error.instance) and (
+            v != "enum" and s.get("type") in ("number", "integer", None)):
+        kind = "an integer" if s.get("type") == "integer" else "a finite number"
+        return " ".join([kind, _bounds(s)]).strip()
     if v == "enum":
         return "one of " + ", ".join(repr(x) for x in s["enum"])
     if v == "type":
         return f"a value of type {s['type']}"
     if v in ("minimum", "exclusiveMinimum", "maximum", "exclusiveMaximum"):
-        parts = []
-        if "minimum" in s:
-            parts.append(f">= {s['minimum']}")
-        if "exclusiveMinimum" in s:
-            parts.append(f"> {s['exclusiveMinimum']}")
-        if "maximum" in s:
-            parts.append(f"<= {s['maximum']}")
-        if "exclusiveMaximum" in s:
-            parts.append(f"< {s['exclusiveMaximum']}")
-        return "a number " + " and ".join(parts)
+        return "a number " + _bounds(s)
     if v == "additionalProperties":
         allowed = sorted(s.get("properties", {}))
         return "only the keys " + ", ".join(allowed) if allowed else "no other keys"
@@ -166,6 +213,19 @@ def _raise_first(errors, source: str, prefix=()):
     raise ConfigError(f"{source}: {_key(path)} = {e.instance!r} is not allowed; use {_allowed(e)}")
 
 
+def _check_finite(obj, source: str, path=()):
+    """Refuse NaN and infinity anywhere (the schema's number type refuses them where it
+    types a value; this catches the rest)."""
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            _check_finite(v, source, tuple(path) + (k,))
+    elif isinstance(obj, list):
+        for k, v in enumerate(obj):
+            _check_finite(v, source, tuple(path) + (k,))
+    elif isinstance(obj, float) and not math.isfinite(obj):
+        raise ConfigError(f"{source}: {_key(path)} = {obj} is not allowed; use a finite number")
+
+
 def deep_merge(base: dict, override: dict) -> dict:
     """Recursively merge ``override`` into a copy of ``base``."""
     out = copy.deepcopy(base)
@@ -197,6 +257,7 @@ def validate_case(case: dict, source: str = "case", prefix=()) -> dict:
     sub = dict(schema["$defs"][f"protocol_{name}"])
     _raise_first(_Validator(sub).iter_errors(case["protocol"]), source,
                  tuple(prefix) + ("protocol",))
+    _check_finite(case, source, prefix)
     _check_case(case, source, ".".join(map(str, prefix)) + "." if prefix else "")
     return case
 
@@ -569,6 +630,7 @@ def validate_config(config: dict, source: str = "config") -> dict:
         raise ConfigError(f"{source}: a configuration is a mapping of keys")
     config = coerce_numbers(resolve_extends(copy.deepcopy(config), source))
     _raise_first(_Validator(_load_schema("config.schema.yaml")).iter_errors(config), source)
+    _check_finite({k: v for k, v in config.items() if k != "studies"}, source)
     cases = {}
     for name, study in config["studies"].items():
         variants = study.get("variants") or {"base": {}}

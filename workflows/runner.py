@@ -49,7 +49,7 @@ def _pysim(case_path: Path, data: Path, out: Path, threads: int, timeout: float)
     import pysim
 
     cmd = [sys.executable, "-m", "pysim", "run", str(case_path), "--data", str(data), "--out",
-           str(out), "--no-progress"]
+           str(out), "--no-progress", "--threads", str(threads)]
     # resume only a checkpoint of this very case and start (a changed case starts over)
     stamp = engines.resume_stamp("pysim", load_case(case_path), data)
     stamp_path = out / "resume.json"

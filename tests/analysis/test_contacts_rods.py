@@ -327,3 +327,66 @@ def test_contact_angles_of_isotropic_contacts_on_short_rods(rng):
     phi = contact_angles(fr, _table(i, j, pts))[:10000]
     assert phi.mean() == pytest.approx(np.pi / 4, abs=0.01)
     assert np.mean(phi < np.pi / 6) == pytest.approx(1 / 3, abs=0.012)
+
+
+def network(pairs, ids_at):
+    """A contact table of the made-up network ``pairs`` (particle ids), each contact at the
+    midpoint of its two centres ``ids_at`` ({id: centre})."""
+    i = np.array([p[0] for p in pairs])
+    j = np.array([p[1] for p in pairs])
+    points = [0.5 * (np.asarray(ids_at[a]) + np.asarray(ids_at[b])) for a, b in pairs]
+    return _table(i, j, points)
+
+
+#: a tetrahedron 1-2-3-4 (3 contacts each), particle 5 on 1 and 2, particle 6 on 5 only
+TETRA = [(1, 2), (1, 3), (1, 4), (2, 3), (2, 4), (3, 4), (5, 1), (5, 2), (6, 5)]
+
+
+@pytest.mark.parametrize("length", [0.0, 2.0])
+def test_frictional_grains_are_held_by_d_contacts(length):
+    """With friction a 3-D grain, sphere or rod, is held by 3 contacts: of the made-up
+    network the tetrahedron stays, and the rule still cascades (6 hangs on 5 alone; once it
+    goes, 5 has 2). Without friction the same network is all rattlers (spheres need 4,
+    rods 6)."""
+    from analysis.contacts import default_c_min
+
+    x = np.array([[1, 1, 1], [3, 1, 1], [2, 3, 1], [2, 2, 3], [4, 4, 4], [6, 6, 6.0]])
+    fr = frame_of(x, 0.5, [20.0] * 3, axis=[0, 0, 1.0], length=length)
+    c = network(TETRA, dict(zip(range(1, 7), x)))
+    assert default_c_min(fr, friction=0.5) == 3
+    assert default_c_min(fr) == (6 if length else 4)
+    dry = ContactNumber().compute(fr, c)
+    assert dry.n_rattlers == 6 and dry.z_rattler_free == 0.0
+    wet = ContactNumber(friction=0.5)
+    cn = wet.compute(fr, c)
+    assert cn.rattlers.tolist() == [False] * 4 + [True, True]
+    assert cn.z_rattler_free == 3.0 and cn.z == 18 / 6
+    assert wet.describe(fr) == "fewer than 3 contacts"
+    assert ContactNumber().describe(fr) == f"fewer than {6 if length else 4} contacts"
+    # an explicit c_min wins over the friction
+    assert ContactNumber(c_min=4, friction=0.5).compute(fr, c).n_rattlers == 6
+
+
+@pytest.mark.parametrize("length", [0.0, 1.0])
+def test_frictional_two_dimensional_grains_are_held_by_two_contacts(length):
+    """2-D with friction: a ring of four grains (2 contacts each, not on opposite flat
+    sides) carries load; a grain on one contact does not. The frictionless 2-D rule
+    removes the ring (disks need 3; rods' 2 contacts must sit on opposite flat sides)."""
+    x = np.array([[2, 2, 0], [4, 2, 0], [4, 4, 0], [2, 4, 0], [6, 6, 0.0]])
+    fr = frame_of(x, 0.5, [20.0, 20.0, 1.0], axis=[1.0, 0, 0], length=length, dimension=2,
+                  periodic=(True, True, False))
+    c = network([(1, 2), (2, 3), (3, 4), (4, 1), (5, 3)], dict(zip(range(1, 6), x)))
+    assert ContactNumber().compute(fr, c).n_rattlers == 5
+    wet = ContactNumber(friction=0.3)
+    cn = wet.compute(fr, c)
+    assert cn.rattlers.tolist() == [False] * 4 + [True]
+    assert cn.z_rattler_free == 2.0
+    assert wet.describe(fr) == "fewer than 2 contacts"
+    assert ContactNumber().describe(fr).startswith("the 2-D rule")
+
+
+def test_friction_must_be_a_number_at_least_zero():
+    with pytest.raises(ValueError, match="friction must be a number >= 0, got -0.1"):
+        ContactNumber(friction=-0.1)
+    with pytest.raises(ValueError, match="friction must be a number >= 0, got nan"):
+        ContactNumber(friction=float("nan"))

@@ -80,8 +80,9 @@ def test_two_stage_compression_fits_the_slow_stage_only(tmp_path, rng):
 
 def test_z_j_skips_frames_without_a_backbone(tmp_path, monkeypatch):
     """The first frame above the extrapolated phi_J can still be unjammed: rattler
-    removal empties it (z_rattler_free 0). z_J is that of the first frame that keeps a
-    backbone, not 0."""
+    removal empties it (z_rattler_free 0). z_J comes from the frames that keep a backbone,
+    extrapolated to phi_J (it used to be the first such frame's z at its own phi, 0.632),
+    not 0."""
     from analysis import summary
     from pysim import io
 
@@ -92,12 +93,82 @@ def test_z_j_skips_frames_without_a_backbone(tmp_path, monkeypatch):
         for k, (f, q) in enumerate(zip(phi, p)):
             io.write_thermo_row(fh, (k * 100, k, f, q, 0.0, 0.0, 0))
     curves = pd.DataFrame({"step": [0, 1, 2, 3], "phi": [0.62, 0.6301, 0.632, 0.64],
+                           "pressure": [0.0, 5e-5, 1e-3, 5e-3],
                            "z": [3.0, 4.5, 5.6, 6.2], "z_rattler_free": [0.0, 0.0, 5.9, 6.4],
                            "z_bonds": [3.0, 4.5, 5.6, 6.2], "n_rattlers": [500, 500, 80, 20],
                            "n": [500] * 4, "s_nematic": [np.nan] * 4})
-    monkeypatch.setattr(summary, "frame_curves", lambda run, c_min: curves.copy())
+    monkeypatch.setattr(summary, "frame_curves", lambda run, c_min, friction: curves.copy())
     rows, _curves, _thermo = summary.analyse_compression(tmp_path, (1e-3, 1e-2), 1.0)
     got = {name: v for name, v, _e in rows}
-    assert got["phi_j"] == pytest.approx(0.63, abs=1e-3)
-    assert got["z_j"] == 5.9 and got["phi_at_z_j"] == 0.632
-    assert got["rattler_fraction_j"] == pytest.approx(80 / 500)
+    phi_j = got["phi_j"]
+    assert phi_j == pytest.approx(0.63, abs=1e-3)
+    # the line through (0.632, 5.9) and (0.64, 6.4) at phi_J
+    assert got["z_j"] == pytest.approx(5.9 - 0.5 / 0.008 * (0.632 - phi_j), rel=1e-12)
+    assert got["phi_at_z_j"] == phi_j and got["z_j_frames"] == 2
+    # 80 and 20 rattlers of 500 on the same line
+    assert got["rattler_fraction_j"] == pytest.approx(0.16 + 0.12 / 0.008 * (0.632 - phi_j))
+    # every frame has z with rattlers: interpolated between 0.6301 and 0.632
+    assert got["z_j_with_rattlers"] == pytest.approx(np.interp(phi_j, curves.phi, curves.z))
+
+
+def jammed_curves(phi, law, p_slope=0.5, phi_j=0.56, n=1000, backbone_from=None):
+    """Frames of a compression whose rattler-free contact number follows ``law(phi)``
+    from ``backbone_from`` (default ``phi_j``) on (no backbone below) and whose pressure
+    rises linearly from ``phi_j``."""
+    phi = np.round(np.asarray(phi, dtype=float), 9)
+    above = phi >= (phi_j if backbone_from is None else backbone_from)
+    z = np.where(above, law(np.maximum(phi, phi_j)), 0.0)
+    return pd.DataFrame({"step": np.arange(len(phi)), "phi": phi,
+                         "pressure": p_slope * np.clip(phi - phi_j, 0, None),
+                         "z": np.where(phi >= phi_j, law(np.maximum(phi, phi_j)) + 0.3, 2.0),
+                         "z_rattler_free": z, "z_bonds": z,
+                         "n_rattlers": np.where(above, 50, n), "n": n, "s_nematic": 0.1 * phi})
+
+
+def test_z_j_is_extrapolated_to_the_jamming_point():
+    """z_J is the contact number at phi_J, the p -> 0 limit, from the frames above it on
+    the first pressure rise: z = 4.3 + 40 (phi - phi_J) gives back 4.3, where the first
+    frame above phi_J (0.002 above) reads 4.38, and the first that keeps a backbone when
+    those near jamming do not (0.026 above: the frictional spheres of issue 48) 5.34."""
+    from analysis.summary import z_at_jamming
+
+    def law(f):
+        return 4.3 + 40.0 * (f - 0.56)
+
+    phi = 0.502 + 0.004 * np.arange(25)  # 0.502 ... 0.598, none at phi_J = 0.56
+    curves = jammed_curves(phi, law)
+    got = z_at_jamming(curves, 0.56, p_max=0.014)
+    assert got["z_j"][0] == pytest.approx(4.3, abs=1e-9) and got["z_j"][1] < 1e-6
+    assert got["z_j_bonds"][0] == pytest.approx(4.3, abs=1e-9)
+    assert got["phi_at_z_j"][0] == 0.56
+    assert got["z_j_frames"][0] == 3  # the nearest three of phi 0.562 ... 0.586 (p <= p_max)
+    assert got["rattler_fraction_j"][0] == pytest.approx(0.05)
+    assert got["s_nematic_j"][0] == pytest.approx(0.056)
+    # with rattlers, z exists at every frame: interpolated between 0.558 and 0.562
+    assert got["z_j_with_rattlers"][0] == pytest.approx(0.5 * (2.0 + law(0.562) + 0.3))
+    late = jammed_curves(phi, law, backbone_from=0.585)
+    got = z_at_jamming(late, 0.56, p_max=0.014)
+    assert law(0.586) == pytest.approx(5.34)
+    assert got["z_j"][0] == pytest.approx(4.3, abs=1e-9) and got["z_j_frames"][0] == 2
+    assert got["phi_at_z_j"][0] == 0.56
+    # noise on the line: the intercept's standard error from three frames on
+    noisy = curves.copy()
+    noisy.loc[noisy.phi > 0.56, "z_rattler_free"] += 0.05 * (-1.0) ** np.arange(
+        int((noisy.phi > 0.56).sum()))
+    z_j, err = z_at_jamming(noisy, 0.56, p_max=0.014)["z_j"]
+    assert abs(z_j - 4.3) < 3 * err and 0.02 < err < 0.3
+    # only frames on the first rise: with p_max below the third frame's pressure, two
+    assert z_at_jamming(curves, 0.56, p_max=0.004)["z_j_frames"][0] == 2
+
+
+def test_z_j_from_one_frame_is_read_at_that_frame():
+    """With a single frame that keeps a backbone there is nothing to extrapolate with: its
+    own z, and its own phi as phi_at_z_j; without any, NaN."""
+    from analysis.summary import z_at_jamming
+
+    curves = jammed_curves([0.55, 0.57], lambda f: np.full_like(f, 4.9))
+    got = z_at_jamming(curves, 0.56, p_max=1.0)
+    assert got["z_j"][0] == 4.9 and got["phi_at_z_j"][0] == 0.57 and got["z_j_frames"][0] == 1
+    none = z_at_jamming(curves.iloc[:1], 0.56, p_max=1.0)
+    assert np.isnan(none["z_j"][0]) and np.isnan(none["phi_at_z_j"][0])
+    assert np.isnan(z_at_jamming(curves, np.nan, p_max=1.0)["z_j"][0])

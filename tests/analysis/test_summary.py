@@ -64,3 +64,86 @@ def test_cycle_observables_need_several_phases():
     rows = dict((name, value) for name, value, _ in cycle_rows(cyc, n_grains=4))
     assert rows["cycle_bins"] == 1
     assert np.isnan(rows["ke_cycle"]) and np.isnan(rows["contacts_flight"])
+
+
+def jamming_rows(**values):
+    from analysis.summary import JAMMED_NAMES
+
+    rows = [("phi_j", 0.56, 1e-3), ("jamming_slope", 20.0, np.nan)]
+    rows += [(name, values.get(name, 4.5), np.nan) for name in JAMMED_NAMES]
+    return rows + [("phi_final", 0.6, np.nan)]
+
+
+def frames(n_rattlers, phi=(0.55, 0.57, 0.59), s_nematic=np.nan, n=200):
+    c = pd.DataFrame({"phi": phi, "n_rattlers": n_rattlers, "n": n, "s_nematic": s_nematic})
+    c.attrs["rattler_rule"] = "fewer than 6 contacts"
+    return c
+
+
+def test_problems_name_nan_observables_and_emptied_packings():
+    """Every NaN observable is named (the nematic order of spheres, which have none,
+    aside); frames at or above phi_J that the rattler rule empties are counted, with the
+    rule and what to do about it; frames below jamming may be empty."""
+    from analysis.summary import problems
+
+    assert problems(jamming_rows(s_nematic_j=np.nan), frames([200, 10, 5])) == []
+    got = problems(jamming_rows(z_j=np.nan, z_j_bonds=np.nan, s_nematic_j=np.nan),
+                   frames([200, 200, 200]))
+    assert got == [
+        "observables z_j, z_j_bonds are NaN",
+        "every grain is a rattler (fewer than 6 contacts) in 2 of the 2 frames at or above "
+        "phi_j = 0.56 (phi 0.57 to 0.59); set analysis.c_min in the study's configuration if "
+        "the rule does not fit these grains"]
+    # rods: a NaN nematic order at jamming is a problem too
+    assert problems(jamming_rows(s_nematic_j=np.nan), frames([200, 10, 5], s_nematic=0.2)) == [
+        "observable s_nematic_j is NaN"]
+    # without a jamming point every frame counts
+    rows = [("phi_j", np.nan, np.nan), ("z_j", 5.0, np.nan)]
+    assert problems(rows, frames([200, 10, 5]))[1].startswith(
+        "every grain is a rattler (fewer than 6 contacts) in 1 of the 3 frames of the run")
+    assert problems([("k_ratio", np.nan, np.nan), ("phi_deposit", 0.6, np.nan)]) == [
+        "observable k_ratio is NaN"]
+
+
+def test_analyse_run_passes_the_rattler_rule_and_warns_on_stderr(tmp_path, monkeypatch,
+                                                                 capsys):
+    """workflows.scripts.analyse_run: the case's friction and --c-min reach the analysis,
+    and its problems are 'warning:' lines on stderr (the pipeline's analysis.log)."""
+    import json
+
+    import yaml
+
+    from workflows.case import validate_case
+    from workflows.scripts import analyse_run
+
+    case = validate_case({
+        "particles": {"n": 500, "diameter": {"mean": 1.0}},
+        "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 300.0, "friction": 0.5,
+                    "k_t": 2e4},
+        "protocol": {"name": "compress", "phi_init": 0.3, "rate": 0.005, "phi_final": 0.7,
+                     "dt": 1e-4},
+        "seed": 1})
+    (tmp_path / "case.yaml").write_text(yaml.safe_dump(case))
+    run = tmp_path / "pysim"
+    run.mkdir()
+    (run / "run.json").write_text(json.dumps({"status": "ok"}))
+    seen = {}
+
+    def fake(run_dir, window, p_scale, **kw):
+        seen.update(kw)
+        return jamming_rows(z_j=np.nan), frames([200, 200, 10]), None
+
+    monkeypatch.setattr(analyse_run, "analyse_compression", fake)
+    args = ["--case", tmp_path / "case.yaml", "--run", run, "--study", "s", "--variant", "v",
+            "--seed", "1", "--engine", "pysim", "--observables", run / "observables.csv",
+            "--curves", run / "curves.csv"]
+    assert analyse_run.main([str(a) for a in args] + ["--c-min", "2"]) == 0
+    assert seen == {"fit_from": None, "c_min": 2, "friction": 0.5}
+    err = capsys.readouterr().err.splitlines()
+    assert err == [f"warning: {run}: observable z_j is NaN",
+                   f"warning: {run}: every grain is a rattler (fewer than 6 contacts) in 1 of "
+                   "the 2 frames at or above phi_j = 0.56 (phi 0.57 to 0.57); set "
+                   "analysis.c_min in the study's configuration if the rule does not fit these "
+                   "grains"]
+    assert analyse_run.main([str(a) for a in args]) == 0
+    assert seen["c_min"] is None

@@ -142,3 +142,36 @@ def test_jammed_rods_with_end_bonds_are_force_and_torque_balanced(tmp_path):
     assert bal.force_max < 1e-2 and bal.torque_max < 1e-2
     cn = ContactNumber().compute(f, c)
     assert 4.0 < cn.z_bonds < 6.0 and cn.z_rattler_free <= cn.z_bonds
+
+
+def test_end_bonds_are_refused_in_three_dimensions():
+    """The case schema allows end bonds in 2-D only; the Python API refuses a 3-D state
+    with them too, before anything runs (and still takes a 2-D one)."""
+    from pysim.simulation import Simulation
+    from pysim.state import State
+
+    model = ContactModel("harmonic", k_n=1.0, spine_contact="end_bonds")
+    x = np.array([[2.0, 2.0, 2.0], [5.0, 5.0, 5.0]])
+    rods3 = State.create(x, 0.5, 2.0, [12.0, 12.0, 12.0])
+    with pytest.raises(ValueError, match=r"^spine_contact 'end_bonds' is a 2-D law, and this "
+                                         r"state is 3-D; use spine_contact 'closest' in 3-D$"):
+        Simulation(rods3, model, dt=1e-3)
+    x[:, 2] = 0.0
+    rods2 = State.create(x, 0.5, 2.0, [12.0, 12.0, 1.0], periodic=(True, True, False),
+                         dimension=2)
+    assert Simulation(rods2, model, dt=1e-3).state is rods2
+
+
+@pytest.mark.parametrize("kw, message", [
+    ({"k_n": float("nan")}, r"^k_n = nan is not allowed; use a finite number > 0$"),
+    ({"k_n": 1.0, "gamma_n": float("nan")},
+     r"^gamma_n = nan is not allowed; use a finite number >= 0$"),
+    ({"k_n": 1.0, "gamma_bg": float("inf")},
+     r"^gamma_bg = inf is not allowed; use a finite number >= 0$"),
+    ({"k_n": 1.0, "mu": 0.5, "spine_contact": "end_bonds"},
+     r"^spine_contact 'end_bonds' is frictionless and cohesionless \(got mu = 0.5, f_coh = 0.0\); "
+     r"use mu = 0 and f_coh = 0, or spine_contact 'closest'$"),
+])
+def test_contact_model_refuses_what_the_case_schema_refuses(kw, message):
+    with pytest.raises(ValueError, match=message):
+        ContactModel("hooke", **kw)

@@ -320,3 +320,32 @@ def test_relaxation_rounds_stop_once_the_energy_settles(tmp_path, monkeypatch):
     assert not res["force_balanced"] and res["energy_settled"]
     assert max(res["force_residual_max"], res["torque_residual_max"]) < jammed.BALANCE_TOL
     assert res["converged"]
+
+
+def test_threads_option_sets_the_kernels_threads_and_keeps_the_bits(tmp_path):
+    """``--threads`` (default 1, as the pipeline) is the number the run used, recorded in
+    run.json; 1 and 2 threads write the same bits."""
+    import json
+    import os
+
+    case = validate_case({
+        "particles": {"n": 120, "aspect_ratio": 1.0, "diameter": {"mean": 1.0}},
+        "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 300.0, "gamma_bg": 1.0},
+        "protocol": {"name": "compress", "phi_init": 0.25, "rate": 0.2, "phi_final": 0.45,
+                     "dt": 1e-4},
+        "output": {"thermo_every": 500, "dump_every": 1000}, "seed": 5})
+    cp = tmp_path / "case.yaml"
+    cp.write_text(yaml.safe_dump(case))
+    write_initial(case, tmp_path / "init.data")
+    env = dict(os.environ, NUMBA_NUM_THREADS="2")
+    outs = {}
+    for extra in ([], ["--threads", "2"]):
+        out = tmp_path / f"out{len(extra)}"
+        r = subprocess.run([sys.executable, "-m", "pysim", "run", str(cp), "--data",
+                            str(tmp_path / "init.data"), "--out", str(out), "--no-progress",
+                            *extra], capture_output=True, text=True, env=env)
+        assert r.returncode == 0, r.stderr
+        outs[json.loads((out / "run.json").read_text())["threads"]] = out
+    assert sorted(outs) == [1, 2]
+    for name in ("particles.dump", "contacts.dump", "thermo.dat"):
+        assert (outs[1] / name).read_bytes() == (outs[2] / name).read_bytes(), name

@@ -5,6 +5,7 @@ import copy
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 import yaml
 
@@ -161,6 +162,21 @@ CONFIG_CASES = [
     ({"engines": {"lammps": {"ranks": 0}}, "studies": {"s": {"engines": ["pysim"], "seeds": [1],
                                                             "case": {}}}},
      "engines.lammps.ranks = 0 is not allowed; use a number >= 1"),
+    ({"engines": {"pysim": {"timeout": float("inf")}},
+      "studies": {"s": {"engines": ["pysim"], "seeds": [1], "case": {}}}},
+     "engines.pysim.timeout = inf is not allowed; use a finite number > 0"),
+    ({"studies": {"s": {"engines": ["pysim"], "seeds": [1], "case": {},
+                        "analysis": {"c_min": -1}}}},
+     "studies.s.analysis.c_min = -1 is not allowed; use a number >= 0 and <= 100"),
+    ({"studies": {"s": {"engines": ["pysim"], "seeds": [1], "case": {},
+                        "analysis": {"c_min": 2.5}}}},
+     "studies.s.analysis.c_min = 2.5 is not allowed; use a value of type integer"),
+    ({"studies": {"s": {"engines": ["pysim"], "seeds": [1], "case": {},
+                        "analysis": {"cmin": 3}}}},
+     "unknown key 'studies.s.analysis.cmin'; allowed here: c_min, jamming_window"),
+    ({"studies": {"s": {"engines": ["pysim"], "seeds": [1], "case": {},
+                        "analysis": {"jamming_window": [float("nan"), 1e-2]}}}},
+     "studies.s.analysis.jamming_window.0 = nan is not allowed; use a finite number > 0"),
 ]
 
 
@@ -199,3 +215,110 @@ def test_growth_box_is_checked_up_to_phi_max():
     with pytest.raises(ConfigError, match=r"^case.yaml: protocol.phi_grow = 0.5 must be below "
                                           r"phi_max = 0.45$"):
         validate_case(bad, "case.yaml")
+
+
+def cli(tmp_path, *args, env=None):
+    """``python -m pysim ARGS`` (the venv's python); the output folder is tmp_path/out."""
+    return subprocess.run([sys.executable, "-m", "pysim", *map(str, args)], capture_output=True,
+                          text=True, env=env)
+
+
+def assert_refused(r, tmp_path, start):
+    """Exit status 2, one line on stderr that starts with ``start``, nothing on stdout and
+    no output folder."""
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.startswith(start), r.stderr
+    assert r.stderr.count("\n") == 1 and "Traceback" not in r.stderr
+    assert r.stdout == ""
+    assert not (tmp_path / "out").exists()
+
+
+def good_case_file(tmp_path):
+    cp = tmp_path / "case.yaml"
+    cp.write_text(yaml.safe_dump(GOOD))
+    return cp
+
+
+@pytest.mark.parametrize("content, message", [
+    (None, "no such file; give a LAMMPS data file of atom_style sphere or ellipsoid, as "
+           "python -m pysim init writes"),
+    ("garbage\n", "not a LAMMPS data file (no 'N atoms' line with N >= 1 in its header); give "
+                  "a LAMMPS data file of atom_style sphere or ellipsoid, as python -m pysim "
+                  "init writes"),
+    (b"\x89PNG\r\n\x1a\n\x00\xff\xfe", "not a text file; give a LAMMPS data file"),
+    ("# t\n\n2 atoms\n0 9 xlo xhi\n0 9 ylo yhi\n0 9 zlo zhi\n\nAtoms\n\n1 1 1 1 1 1 1\n",
+     "the header says 2 atoms, the Atoms section has 1 lines"),
+    ("# t\n\n1 atoms\n0 9 xlo xhi\n0 9 ylo yhi\n\nAtoms\n\n1 1 1 1 1 1 1\n",
+     "the header needs the box, lines 'lo hi xlo xhi', 'lo hi ylo yhi' and 'lo hi zlo zhi' "
+     "with lo < hi"),
+    ("# t\n\n1 atoms\n0 9 xlo xhi\n0 9 ylo yhi\n0 9 zlo zhi\n\nAtoms\n\n1 1 1 1\n",
+     "an Atoms line has 4 columns; atom_style sphere and ellipsoid lines have 7 or more"),
+    ("# t\n\n1 atoms\n0 9 xlo xhi\n0 9 ylo yhi\n0 9 zlo zhi\n\nAtoms\n\n1 1 1 1 1 nan 1\n",
+     "holds a value that is not finite (nan or inf)"),
+])
+def test_cli_bad_data_file_is_one_line_before_anything_is_written(tmp_path, content, message):
+    """A missing or broken --data file: one line naming the file and what a data file
+    holds, exit status 2, and no output folder (it used to be a traceback after the folder
+    was made)."""
+    data = tmp_path / "init.data"
+    if isinstance(content, bytes):
+        data.write_bytes(content)
+    elif content is not None:
+        data.write_text(content)
+    r = cli(tmp_path, "run", good_case_file(tmp_path), "--out", tmp_path / "out", "--data", data)
+    assert_refused(r, tmp_path, f"error: {data}: {message}")
+
+
+def test_cli_data_file_of_another_case(tmp_path):
+    from pysim.io import write_sphere_data
+
+    data = tmp_path / "init.data"
+    write_sphere_data(data, np.full((3, 3), 1.0) * np.arange(3)[:, None], np.ones(3),
+                      [9.0, 9.0, 9.0], 1.0)
+    r = cli(tmp_path, "run", good_case_file(tmp_path), "--out", tmp_path / "out", "--data", data)
+    assert_refused(r, tmp_path, f"error: {data} holds 3 particles, the case says particles.n = "
+                                "500; give the data file of this case")
+
+
+@pytest.mark.parametrize("old, new, message", [
+    ("k_n: 100000.0", "k_n: .nan", "contact.k_n = nan is not allowed; use a finite number > 0"),
+    ("gamma_bg: 1.0", "gamma_bg: .inf",
+     "contact.gamma_bg = inf is not allowed; use a finite number >= 0"),
+    ("rate: 0.005", "rate: -.inf", "protocol.rate = -inf is not allowed; use a finite number > 0"),
+    ("seed: 1", "seed: .nan", "seed = nan is not allowed; use an integer >= 0"),
+    ("  n: 500\n", "  n: 500\n  n: 600\n",
+     ":11: key 'n' is given twice in one mapping (lines 10 and 11); keep one"),
+    ("seed: 1\n", "seed: 1\nseed: 2\n",
+     ":18: key 'seed' is given twice in one mapping (lines 17 and 18); keep one"),
+])
+def test_cli_non_finite_numbers_and_repeated_keys(tmp_path, old, new, message):
+    """NaN and infinity pass every bound of the schema and a repeated key used to keep its
+    last value silently: both are one-line errors now."""
+    cp = good_case_file(tmp_path)
+    text = cp.read_text()
+    assert old in text
+    cp.write_text(text.replace(old, new))
+    r = cli(tmp_path, "run", cp, "--out", tmp_path / "out")
+    sep = "" if message.startswith(":") else ": "
+    assert_refused(r, tmp_path, f"error: {cp}{sep}{message}\n")
+
+
+def test_repeated_keys_of_a_merge_may_be_overridden(tmp_path):
+    """YAML merge keys (``<<``, as the shipped profiles use them) are overridden on purpose."""
+    from workflows.case import read_yaml
+
+    p = tmp_path / "c.yaml"
+    p.write_text("a: &base {x: 1, y: 2}\nb: {<<: *base, y: 3}\n")
+    assert read_yaml(p) == {"a": {"x": 1, "y": 2}, "b": {"x": 1, "y": 3}}
+
+
+@pytest.mark.parametrize("threads", [0, -1, 3])
+def test_cli_threads_out_of_range(tmp_path, threads):
+    import os
+
+    env = dict(os.environ, NUMBA_NUM_THREADS="2")
+    for cmd in (["run", good_case_file(tmp_path), "--out", tmp_path / "out"],
+                ["init", good_case_file(tmp_path), "--out", tmp_path / "out"]):
+        r = cli(tmp_path, *cmd, "--threads", threads, env=env)
+        assert_refused(r, tmp_path, f"error: --threads {threads} is not allowed; use 1 to 2 "
+                                    "(at most Numba's pool, NUMBA_NUM_THREADS")

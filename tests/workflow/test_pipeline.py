@@ -107,3 +107,38 @@ def test_which_profiles_get_trends_and_sets_figures(tmp_path, profile, trends):
     rules = r.stdout + r.stderr
     assert ("plot_trends" in rules) == trends, rules[-2000:]
     assert ("plot_tapping_sets" in rules) == profile.startswith("tapping")
+
+
+def test_config_key_given_twice_stops_before_anything_runs(tmp_path):
+    """Snakemake's own loader keeps the last of a key given twice; the pipeline refuses it."""
+    text = yaml.safe_dump(tiny_config(tmp_path / "results"))
+    assert "\n        n: 200\n" in text
+    p = tmp_path / "twice.yaml"
+    p.write_text(text.replace("\n        n: 200\n", "\n        n: 200\n        n: 300\n"))
+    r = subprocess.run([SNAKEMAKE, "--snakefile", str(ROOT / "Snakefile"), "--directory",
+                        str(tmp_path), "--configfile", str(p), "--cores", "1", "--dry-run"],
+                       capture_output=True, text=True)
+    assert r.returncode != 0
+    assert "key 'n' is given twice in one mapping" in r.stderr, r.stderr[-2000:]
+    assert not (tmp_path / "results").exists()
+
+
+def test_rattler_rule_reaches_the_analysis_and_the_figures(tmp_path):
+    """A study's analysis.c_min and each variant's friction go to analyse_run and
+    plot_study (dry run: the commands)."""
+    cfg = tiny_config(tmp_path / "results")
+    study = cfg["studies"]["sphere_jamming"]
+    study["engines"] = ["pysim"]
+    study["analysis"]["c_min"] = 3
+    study["variants"] = {"rough": {"contact": {"friction": 0.5, "k_t": 2e4}}}
+    p = tmp_path / "rough.yaml"
+    p.write_text(yaml.safe_dump(cfg))
+    r = subprocess.run([SNAKEMAKE, "--snakefile", str(ROOT / "Snakefile"), "--directory",
+                        str(tmp_path), "--configfile", str(p), "--cores", "1", "--dry-run",
+                        "--printshellcmds", "all"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr[-2000:]
+    out = r.stdout + r.stderr
+    analyse = [ln for ln in out.splitlines() if "workflows.scripts.analyse_run" in ln]
+    figures = [ln for ln in out.splitlines() if "workflows.scripts.plot_study" in ln]
+    assert analyse and all("--c-min 3" in ln for ln in analyse), out[-3000:]
+    assert figures and all("--friction 0.5 --c-min 3" in ln for ln in figures), out[-3000:]

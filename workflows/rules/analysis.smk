@@ -5,6 +5,12 @@ def _window(wc):
     return CFG["studies"][wc.study].get("analysis", {}).get("jamming_window", [1e-3, 1e-2])
 
 
+def _c_min(wc):
+    """``--c-min N`` when the study's analysis sets the rattler rule, else nothing."""
+    c_min = CFG["studies"][wc.study].get("analysis", {}).get("c_min")
+    return "" if c_min is None else f"--c-min {int(c_min)}"
+
+
 def _parameters(wc):
     return json.dumps({k: v[wc.variant] for k, v in varying_parameters(CFG, wc.study).items()})
 
@@ -21,6 +27,7 @@ rule analyse_run:
     params:
         run=f"{RUN}/{{engine}}",
         window=lambda wc: " ".join(map(str, _window(wc))),
+        c_min=_c_min,
         parameters=_parameters,
     wildcard_constraints:
         engine="pysim|lammps|lammps-body|liggghts",
@@ -30,7 +37,7 @@ rule analyse_run:
     shell:
         "{PYTHON} -m workflows.scripts.analyse_run --case {input.case} --run {params.run}"
         " --study {wildcards.study} --variant {wildcards.variant} --seed {wildcards.seed}"
-        " --engine {wildcards.engine} --window {params.window}"
+        " --engine {wildcards.engine} --window {params.window} {params.c_min}"
         " --parameters '{params.parameters}'"
         " --observables {output.observables} --curves {output.curves} 2> {log}"
 
@@ -83,3 +90,22 @@ rule vs_paper:
     shell:
         "{PYTHON} -m workflows.scripts.vs_paper --references {REFERENCES}"
         " --results {RESULTS} --out {output.table} --figure {output.figure} 2> {log}"
+
+
+def _echo_analysis_warnings():
+    """Repeat the 'warning:' lines of every analysis log (NaN observables, packings that
+    the rattler rule empties: workflows/scripts/analyse_run.py) where the user sees them."""
+    for d in run_dirs():
+        log = Path(d) / "analysis.log"
+        if log.is_file():
+            for line in log.read_text(errors="replace").splitlines():
+                if line.startswith("warning:"):
+                    sys.stderr.write(f"rodpack: {line}\n")
+
+
+onsuccess:
+    _echo_analysis_warnings()
+
+
+onerror:
+    _echo_analysis_warnings()

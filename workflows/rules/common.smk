@@ -1,16 +1,20 @@
 # Configuration validation, the run table and the final targets.
 import glob
 import math
+from pathlib import Path
 import json
 import os
 import sys
 
-from workflows.case import ConfigError, runs as expand_runs, validate_config, varying_parameters
+from workflows.case import (ConfigError, read_yaml, runs as expand_runs, validate_config,
+                            varying_parameters)
 
 PYTHON = sys.executable
 _CONFIG_SOURCE = ", ".join(map(str, workflow.configfiles)) or "config"
 
 try:
+    for _path in workflow.configfiles:
+        read_yaml(_path)  # Snakemake's own loader keeps the last of a key given twice
     CFG = validate_config(config, source=_CONFIG_SOURCE)
 except ConfigError as exc:
     sys.stderr.write(f"error: {exc}\n")

@@ -12,6 +12,13 @@ def _p_scale(wc):
     return case["contact"]["k_n"] / case["particles"]["diameter"]["mean"]
 
 
+def _friction(wc):
+    case = CFG["_cases"][
+        next(k for k in CFG["_cases"] if k[0] == wc.study and k[1] == wc.variant)
+    ]
+    return case["contact"]["friction"]
+
+
 def _study_p_scale(study):
     # k_n / D of the study's first case: variants of one study share the pressure unit
     case = CFG["_cases"][next(k for k in CFG["_cases"] if k[0] == study)]
@@ -50,10 +57,13 @@ rule plot_study:
         dirs=lambda wc: " ".join(_study_run_dirs(wc)),
         p_scale=_p_scale,
         window=lambda wc: " ".join(map(str, _window(wc))),
+        friction=_friction,
+        c_min=_c_min,
     shell:
         "{PYTHON} -m workflows.scripts.plot_study --pressure {output.pressure}"
         " --contacts {output.contacts} --phi-j {output.phi_j} --p-scale {params.p_scale}"
-        " --window {params.window} {params.dirs} 2> {log}"
+        " --window {params.window} --friction {params.friction} {params.c_min}"
+        " {params.dirs} 2> {log}"
 
 
 #: physical parameters a study's trends are drawn against, in order of preference: the

@@ -1,4 +1,9 @@
-"""Analyse one run directory: ``observables.csv`` (tidy) and ``curves.csv``."""
+"""Analyse one run directory: ``observables.csv`` (tidy) and ``curves.csv``.
+
+What a reader of the numbers must know (:func:`analysis.summary.problems`: NaN
+observables, frames whose rattler removal empties the packing) goes to stderr as
+``warning:`` lines, which the pipeline keeps in the run's ``analysis.log`` and repeats on
+its own stderr when it ends (``workflows/rules/analysis.smk``)."""
 from __future__ import annotations
 
 import argparse
@@ -8,7 +13,7 @@ from pathlib import Path
 
 from analysis.summary import (TIDY_COLUMNS, analyse_compression, analyse_deposit,
                               analyse_growth, analyse_jammed, analyse_settled, analyse_tapping,
-                              tidy)
+                              problems, tidy)
 from pysim.io import atomic_write_text
 from workflows.case import ConfigError, load_case
 from workflows.engines import settles
@@ -54,6 +59,9 @@ def main(argv=None) -> int:
     ap.add_argument("--engine", required=True)
     ap.add_argument("--window", type=float, nargs=2, default=[1e-3, 1e-2],
                     help="jamming-fit pressure window in units of k_n / D")
+    ap.add_argument("--c-min", type=int, default=None, metavar="N",
+                    help="rattler rule: fewer than N contacts (the study's analysis.c_min; "
+                         "default: the rule for the grains and their friction)")
     ap.add_argument("--parameters", default="{}", help="varying case parameters (JSON)")
     ap.add_argument("--observables", required=True, type=Path)
     ap.add_argument("--curves", required=True, type=Path)
@@ -71,15 +79,17 @@ def main(argv=None) -> int:
         atomic_write_text(a.curves, "step,phi\n")
         return 0
     p_scale = case["contact"]["k_n"] / case["particles"]["diameter"]["mean"]
+    rule = {"c_min": a.c_min, "friction": case["contact"]["friction"]}
     if case["protocol"]["name"] == "growth":
-        rows, curves, _thermo = analyse_growth(a.run)
+        rows, curves, _thermo = analyse_growth(a.run, **rule)
     elif case["protocol"]["name"] == "jammed":
-        rows, curves, _thermo = analyse_jammed(a.run,
+        rows, curves, _thermo = analyse_jammed(a.run, **rule,
                                                energy_target=case["protocol"]["energy_target"])
     elif case["protocol"]["name"] == "tapping":
         rows, curves, _thermo = analyse_tapping(a.run, **tap_plan(case))
     elif settles(a.engine, case):  # LIGGGHTS rods: a settled bed, not a compression
-        rows, curves, _thermo = analyse_settled(a.run, case["protocol"]["settle"]["bulk"])
+        rows, curves, _thermo = analyse_settled(a.run, case["protocol"]["settle"]["bulk"],
+                                                **rule)
         settled = record.get("settled")
         rows.append(("settled", float(settled) if settled is not None else float("nan"),
                      float("nan")))
@@ -92,7 +102,8 @@ def main(argv=None) -> int:
         pr = case["protocol"]
         # fit the slow stage only: the fast stage may overshoot into transient jamming
         fit_from = pr["phi_fast"] if pr.get("phi_fast", pr["phi_init"]) > pr["phi_init"] else None
-        rows, curves, _thermo = analyse_compression(a.run, a.window, p_scale, fit_from=fit_from)
+        rows, curves, _thermo = analyse_compression(a.run, a.window, p_scale, fit_from=fit_from,
+                                                    **rule)
     df = tidy(rows, a.study, a.variant, a.engine, a.seed, json.loads(a.parameters))
     for key in PROVENANCE:
         df[key] = record.get(key, "unknown")
@@ -100,6 +111,8 @@ def main(argv=None) -> int:
     atomic_write_text(a.curves, curves.to_csv(index=False))
     if "error" in curves.attrs.get("fit", {}):
         print(f"warning: {a.run}: {curves.attrs['fit']['error']}", file=sys.stderr)
+    for line in problems(rows, curves):
+        print(f"warning: {a.run}: {line}", file=sys.stderr)
     return 0
 
 

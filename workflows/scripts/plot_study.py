@@ -20,12 +20,14 @@ from analysis.packing import packing_fraction
 from workflows.runner import ok_runs
 
 
-def contacts_at_jamming(run_dir: Path, phi_j: float, bulk=None):
+def contacts_at_jamming(run_dir: Path, phi_j: float, bulk=None, c_min: int | None = None,
+                        friction: float = 0.0):
     """``(phi, P(C) with rattlers, P(C) rattler-free)`` of the frame whose packing
     fraction is nearest to ``phi_j`` (``None`` without frames or ``phi_j``). A settled
     bed (``bulk`` = its window ``(lo, hi)``, :func:`analysis.summary.analyse_settled`):
     the last frame, over the particles whose centre lies in the window, rattlers removed
-    inside the window as the analysis does, at ``phi_j``."""
+    inside the window as the analysis does, at ``phi_j``. The rattler rule is the
+    analysis's (``c_min``, ``friction``: :class:`analysis.contacts.ContactNumber`)."""
     if not np.isfinite(phi_j):
         return None
     frames = RunData(run_dir).frames()
@@ -38,14 +40,15 @@ def contacts_at_jamming(run_dir: Path, phi_j: float, bulk=None):
         frame, contacts = frames[-1]
         pairs, fixed = settled_pairs(frame, contacts)
         inside, ratt, counts, counts_free = settled_contact_numbers(
-            frame, pairs, fixed, bulk[0], bulk[1], default_c_min(frame))
+            frame, pairs, fixed, bulk[0], bulk[1],
+            default_c_min(frame, friction) if c_min is None else c_min)
         c_all = counts[inside]
         free = counts_free[inside & ~ratt]
         return (float(phi_j), np.bincount(c_all) / max(len(c_all), 1),
                 np.bincount(free) / max(len(free), 1))
     phis = np.array([packing_fraction(f) for f, _ in frames])
     k = int(np.argmin(np.abs(phis - phi_j)))
-    cn = ContactNumber().compute(*frames[k])
+    cn = ContactNumber(c_min, friction=friction).compute(*frames[k])
     return float(phis[k]), cn.distribution, cn.distribution_rattler_free
 
 
@@ -68,6 +71,10 @@ def main(argv=None) -> int:
     ap.add_argument("--p-scale", type=float, default=1.0)
     ap.add_argument("--window", type=float, nargs=2)
     ap.add_argument("--z-iso", type=float, default=6.0)
+    ap.add_argument("--friction", type=float, default=0.0,
+                    help="the variant's contact.friction (picks the rattler rule)")
+    ap.add_argument("--c-min", type=int, default=None,
+                    help="the study's analysis.c_min (rattler rule), if set")
     ap.add_argument("run_dirs", nargs="+", type=Path,
                     help="run directories holding thermo.dat, curves.csv, observables.csv")
     a = ap.parse_args(argv)
@@ -87,7 +94,8 @@ def main(argv=None) -> int:
                      "points": bulk is not None,
                      "phi_j": val.get("phi_j", float("nan")),
                      "slope": val.get("jamming_slope", float("nan")),
-                     "p_c": contacts_at_jamming(d, val.get("phi_j", float("nan")), bulk)})
+                     "p_c": contacts_at_jamming(d, val.get("phi_j", float("nan")), bulk,
+                                                a.c_min, a.friction)})
     for r in runs:
         r["seed_index"] = sorted(seeds[r["engine"]]).index(r["seed"])
     if not runs:
