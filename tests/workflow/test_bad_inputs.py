@@ -158,7 +158,7 @@ CONFIG_CASES = [
      "studies: name 'Bad-Name' is not allowed; use a name matching ^[a-z][a-z0-9_]*$"),
     ({"studies": {"s": {"engines": ["pysim"], "seeds": [1], "case": {}, "variant": {}}}},
      "unknown key 'studies.s.variant'; allowed here: analysis, case, description, "
-     "engine_seeds, engines, seeds, variants"),
+     "engine_seeds, engines, extends, seeds, variants"),
     ({"engines": {"lammps": {"ranks": 0}}, "studies": {"s": {"engines": ["pysim"], "seeds": [1],
                                                             "case": {}}}},
      "engines.lammps.ranks = 0 is not allowed; use a number >= 1"),

@@ -53,10 +53,13 @@ def test_readme_example_runs(tmp_path):
     assert json.loads((run_dir / "run.json").read_text())["status"] == "ok"
     obs = pd.read_csv(tmp_path / option(script, "--observables"))
     values = obs.set_index("observable")["value"]
-    for name in ("phi_j", "jamming_slope", "phi_final", "pressure_final"):
+    for name in ("phi_j", "jamming_slope", "phi_final", "pressure_final", "z_j"):
         assert math.isfinite(values[name]), f"{name} = {values[name]}"
     # frictional rods jam well below the frictionless ~0.64 and above random loose packing
     assert 0.40 < values["phi_j"] < values["phi_final"] < 0.70
+    # frictional rods keep a backbone at jamming: z_J between the frictional (d + 1 = 4)
+    # and frictionless (2 d_f = 10) isostatic counts
+    assert 4.0 < values["z_j"] < 10.0
     assert math.isfinite(obs.set_index("observable")["uncertainty"]["phi_j"])
     curves = pd.read_csv(tmp_path / option(script, "--curves"))
     assert len(curves) >= 20
