@@ -229,13 +229,21 @@ def _stats(values: pd.Series) -> tuple[float, float, int]:
     return float(v.mean()), float(v.std(ddof=1) / math.sqrt(n)), n
 
 
-def _engine_groups(runs: pd.DataFrame, results: pd.DataFrame, observable: str):
-    """Per engine, the run rows of ``runs`` joined with their value of ``observable``."""
+#: runs pooled as seeds of one result: the same case of the same study on one engine (two
+#: cases at one point of the paper differ in something the paper leaves open, friction
+#: say, and are two results, never one)
+SAME_RUN = ["engine", "study", "case"]
+
+
+def _engine_groups(runs: pd.DataFrame, results: pd.DataFrame, observable: str,
+                   by=SAME_RUN) -> dict:
+    """The run rows of ``runs`` joined with their value of ``observable``, grouped by the
+    columns ``by`` (keys: tuples of their values)."""
     res = results[results["observable"] == observable][
         ["study", "case", "engine", "seed", "value", "uncertainty"]]
     joined = runs.merge(res, on=["study", "case", "engine", "seed"], how="inner")
     joined = joined[np.isfinite(joined["value"].astype(float))]
-    return {e: g for e, g in joined.groupby("engine", sort=True)}
+    return {k: g for k, g in joined.groupby(list(by), sort=True)}
 
 
 def _base_row(ref) -> dict:
@@ -276,7 +284,7 @@ def _value_rows(ref, runs, results) -> list[dict]:
                  else f"no run reports {obs}"}]
     conds = _conditions(ref)
     out = []
-    for engine, g in groups.items():
+    for (engine, *_), g in groups.items():
         good, worst, unchecked = _matching(g, conds, obs)
         note = f"unchecked: {', '.join(unchecked)}" if unchecked else ""
         if len(good):
@@ -315,16 +323,19 @@ def _trend_rows(ref, runs, results) -> list[dict]:
     names = {v: observable_name(ref, **({ref.vary: v} if along else {})) for v in over}
     base["observable"] = names[over[0]] if not along else f"{names[over[0]]} ... {names[over[-1]]}"
     free = _at_point(runs, ref, skip=None if along else ref.vary)
-    per_value = {v: _engine_groups(free, results, names[v]) for v in over}
-    engines = sorted(set().union(*per_value.values()))
-    if not engines:
+    # along one run: each case its own trend; across runs: the cases of one study
+    by = SAME_RUN if along else ["engine", "study"]
+    per_value = {v: _engine_groups(free, results, names[v], by) for v in over}
+    keys = sorted(set().union(*per_value.values()))
+    if not keys:
         return [{**base, "engine": "", "verdict": "not run"}]
     out = []
-    for engine in engines:
-        g = pd.concat([per_value[v][engine] for v in over if engine in per_value[v]])
-        points, missing, differ, unchecked = [], [], [], set()
+    for key in keys:
+        engine = key[0]
+        g = pd.concat([per_value[v][key] for v in over if key in per_value[v]])
+        points, missing, differ, several, unchecked = [], [], [], [], set()
         for v in over:
-            at = per_value[v].get(engine, g.iloc[0:0])
+            at = per_value[v].get(key, g.iloc[0:0])
             if not along and len(at):
                 col = pd.to_numeric(at[ref.vary], errors="coerce")
                 at = at[np.isclose(col.fillna(np.inf), v, rtol=RTOL)]
@@ -336,6 +347,8 @@ def _trend_rows(ref, runs, results) -> list[dict]:
             if not len(good):
                 differ.append(f"at {ref.vary} {_fmt(v)}: " + "; ".join(worst[1]))
                 continue
+            if good["case"].nunique() > 1:
+                several.append(f"{ref.vary} {_fmt(v)}: " + ", ".join(sorted(set(good["case"]))))
             points.append((v, *_stats(good["value"])))
         row = {**base, "engine": engine, "runs": _runs_label(g),
                "ours": ";".join(f"{m:.4g}" for _, m, _, _ in points) if points else np.nan,
@@ -349,6 +362,10 @@ def _trend_rows(ref, runs, results) -> list[dict]:
                                                 + ", ".join(missing)) if x)
         elif differ:
             row["verdict"] = "conditions differ: " + " | ".join(differ)
+        elif several:  # which of them makes the trend is not the paper's to say
+            row["verdict"] = "unresolved"
+            row["note"] = "; ".join(x for x in (row["note"], "several cases at "
+                                                + " | ".join(several)) if x)
         else:
             row["verdict"], row["diff_sigma"] = _trend_verdict(points, ref.expect)
         out.append(row)

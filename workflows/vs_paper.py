@@ -122,8 +122,11 @@ def vs_paper(references, results_dirs) -> pd.DataFrame:
 
 
 def _cell(x, digits: int = 4) -> str:
-    if isinstance(x, str):
-        return x
+    if isinstance(x, str):  # read back from a CSV whose column also holds "a;b" lists
+        try:
+            x = float(x)
+        except ValueError:
+            return x
     if x is None or (isinstance(x, float) and math.isnan(x)):
         return ""
     if isinstance(x, (int, np.integer)) or float(x).is_integer():
@@ -140,8 +143,8 @@ def markdown_table(table: pd.DataFrame, study: str) -> str:
              "**Against the papers** (`docs/studies/vs_paper.csv`, format in "
              "`references/README.md`): " + ", ".join(f"{n} {v}" for v, n in
                                                      sorted(counts.items())) + ".", "",
-             "| id | where | observable | point | paper | engine | ours | seeds | verdict |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "| id | where | observable | point | paper | engine | our runs | ours | seeds | verdict |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for _, r in rows.iterrows():
         point = ", ".join(f"{p}={_cell(r[p])}" for p in (*POINT, "layer", "tap")
                           if _cell(r[p]))
@@ -154,7 +157,8 @@ def markdown_table(table: pd.DataFrame, study: str) -> str:
             ours += f" ± {_cell(r['ours_uncertainty'], 2)}"
         verdict = str(r["verdict"]).replace("|", "/")
         lines.append(f"| {r['id']} | {r['where']} | `{r['observable']}` | {point} | {paper} | "
-                     f"{_cell(r['engine'])} | {ours} | {_cell(r['n_seeds'])} | {verdict} |")
+                     f"{_cell(r['engine'])} | {_cell(r['runs'])} | {ours} | "
+                     f"{_cell(r['n_seeds'])} | {verdict} |")
     lines += ["", BLOCK_END]
     return "\n".join(lines)
 

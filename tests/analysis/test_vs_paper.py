@@ -186,3 +186,20 @@ def test_one_seed_has_no_uncertainty_of_ours():
     r = match(refs(ref()), runs, res).iloc[0]
     assert r.n_seeds == 1 and np.isnan(r.ours_uncertainty) and "one seed" in r.note
     assert r.verdict == "agrees"
+
+
+def test_two_cases_at_one_point_are_two_results_not_two_seeds():
+    """Runs that differ in something the paper leaves open (friction) are never pooled."""
+    a = runs_and_results([0.880, 0.881], case="mu0", friction=0.0)
+    b = runs_and_results([0.890, 0.891], case="mu0.5", friction=0.5)
+    runs = pd.concat([a[0], b[0]], ignore_index=True)
+    res = pd.concat([a[1], b[1]], ignore_index=True)
+    out = match(refs(ref()), runs, res)
+    assert list(out.runs) == ["jamming_2d_paper/mu0", "jamming_2d_paper/mu0.5"]
+    assert list(out.n_seeds) == [2, 2] and list(out.verdict) == ["agrees", "differs"]
+    # a trend across alpha with two cases at one alpha cannot say which one makes it
+    c = runs_and_results([0.90, 0.90], alpha=4.0, case="a4")
+    runs = pd.concat([runs, c[0]], ignore_index=True)
+    res = pd.concat([res, c[1]], ignore_index=True)
+    r = match(refs(trend("increasing", over="1;4")), runs, res).iloc[0]
+    assert r.verdict == "unresolved" and "several cases at alpha 1: mu0, mu0.5" in r.note
