@@ -8,7 +8,7 @@
 
 A bad case file is a one-line error and exit status 2; a run that blows up stops with a
 one-line message naming the step and particles, exit status 3, and keeps its last
-checkpoint. Ctrl-C (SIGINT) stops a run with a one-line message and exit status 130; its
+checkpoint (so does a fed deposit that is blocked, or not settled by its max_time). Ctrl-C (SIGINT) stops a run with a one-line message and exit status 130; its
 last checkpoint stays, and the same command with ``--resume`` goes on from it.
 """
 from __future__ import annotations
@@ -76,7 +76,8 @@ def _run(case, args) -> int:
     except ResumeError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    except (BlowUpError, growth.GrowthLimitError) as exc:
+    except (BlowUpError, growth.GrowthLimitError, deposit.FeedBlockedError,
+            deposit.NotSettledError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 3
     except (KeyboardInterrupt, SystemError) as exc:
