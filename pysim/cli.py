@@ -13,7 +13,8 @@ A bad case file, data file or option is a one-line error and exit status 2, give
 anything is written; a run that blows up stops with a
 one-line message naming the step and particles, exit status 3, and keeps its last
 checkpoint (so does a tapping run whose free preparation has not settled by its
-``max_time``). Ctrl-C (SIGINT) stops a run with a one-line message and exit status 130; its
+``max_time``, and a fed deposit that is blocked or not settled by its ``max_time``).
+Ctrl-C (SIGINT) stops a run with a one-line message and exit status 130; its
 last checkpoint stays, and the same command with ``--resume`` goes on from it.
 """
 from __future__ import annotations
@@ -115,7 +116,8 @@ def _run(case, init, args) -> int:
     except ResumeError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    except (BlowUpError, growth.GrowthLimitError, tapping.SettleError) as exc:
+    except (BlowUpError, growth.GrowthLimitError, tapping.SettleError,
+            deposit.FeedBlockedError, deposit.NotSettledError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 3
     except (KeyboardInterrupt, SystemError) as exc:

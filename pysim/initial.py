@@ -430,6 +430,14 @@ def write_initial(case: dict, path) -> None:
     dim = p.get("dimension", 3)
     alpha = p.get("aspect_ratio", 0.0)
     title = f"rodpack random start, seed {seed}, phi {phi}"
+    if "feed" in case["protocol"]:
+        w = case["container"]["width"]
+        x, u, margin, top = feed_queue(d / 2.0, alpha * d, w, case["protocol"]["feed"]["height"])
+        lo = np.array([-margin, -margin, -0.5])
+        hi = np.array([w + margin, top + margin, 0.5])
+        write_rod_data(path, x, u, d / 2.0, alpha * d, hi - lo, p.get("density", 1.0),
+                       dimension=dim, title=title + f", fed into a box of width {w:g}", box_lo=lo)
+        return
     if case.get("container", {}).get("shape") == "box":
         w = case["container"]["width"]
         x, u, r, length, height = random_spherocylinders_in_box(d / 2.0, alpha * d, phi, w, seed,
@@ -467,6 +475,28 @@ def write_initial(case: dict, path) -> None:
     x, u, r, length, box = random_spherocylinders(d / 2.0, alpha * d, phi, seed, dimension=dim)
     x, u, r, length = _by_cell(np.zeros(3), box, x, u, r, length)
     write_rod_data(path, x, u, r, length, box, p.get("density", 1.0), dimension=dim, title=title)
+
+
+def feed_queue(radius, length, width: float, height: float):
+    """The grains of a fed 2-D deposit (:mod:`pysim.protocols.deposit`) before they
+    enter: in feed order, lying flat in rows above the entry line ``y = height`` of a
+    box of ``width``, clear of each other (gaps of 0.1 of the largest diameter). Only
+    their sizes and order matter: each grain's entry position, orientation and velocity
+    are drawn when it enters. Returns ``(x, axis, margin, top)``: positions (N, 3),
+    spine directions, the margin of one grain length the data file's box keeps around
+    the container, and the height of the queue's top."""
+    radius = np.asarray(radius, dtype=np.float64)
+    length = np.broadcast_to(np.asarray(length, dtype=np.float64), radius.shape)
+    gap = 0.2 * radius.max()
+    longest = float(np.max(2 * radius + length))
+    pitch_x, pitch_y = longest + gap, 2.0 * radius.max() + gap
+    per_row = max(int(width // pitch_x), 1)
+    k = np.arange(len(radius))
+    x = np.zeros((len(radius), 3))
+    x[:, 0] = (k % per_row + 0.5) * pitch_x
+    x[:, 1] = height + longest + (k // per_row + 0.5) * pitch_y
+    axis = np.tile([1.0, 0.0, 0.0], (len(radius), 1))
+    return x, axis, longest, float(x[:, 1].max() + pitch_y)
 
 
 def container_box(diameter_c: float, height: float, longest: float,

@@ -473,6 +473,55 @@ class Simulation:
         self._rebuild()
         self.compute_forces()
 
+    def add_particles(self, x, radius, length, axis, v=None):
+        """Append ``m`` particles (rows ``n ... n + m - 1``) at positions ``x`` (m, 3) with
+        spine directions ``axis``, velocities ``v`` (default rest) and no spin; masses from
+        the state's density. They must touch nothing: no grain or wall within their
+        interaction range (the gap above the cohesion range), so that their force is
+        gravity and drag alone, set here without a force evaluation (which would advance
+        every tangential spring); a ``ValueError`` names the first that does. The pair list
+        is rebuilt, the springs of the old pairs carried over.
+
+        Per call it reallocates the per-particle arrays (O(n)): for a feed of grains one at
+        a time, not for the hot loop."""
+        s = self.state
+        new = State.create(np.atleast_2d(x), radius, length, s.box, axis=np.atleast_2d(axis),
+                           v=None if v is None else np.atleast_2d(v), density=s.density,
+                           periodic=s.periodic, dimension=s.dimension)
+        n0, m = s.n, new.n
+        for k in ("x", "v", "q", "u", "omega", "radius", "length", "mass", "inertia"):
+            setattr(s, k, np.ascontiguousarray(np.concatenate([getattr(s, k), getattr(new, k)])))
+        half = 0.5 * new.length
+        self.half = np.concatenate([self.half, half])
+        self.r_int = np.concatenate([self.r_int, new.radius + half + 0.5 * self.model.d_coh])
+        g = self.sys[itg.GX:itg.GZ + 1]
+        f = new.mass[:, None] * g[None, :] - self.sys[itg.GAMMA_BG] * new.v  # what forces() adds
+        if s.dimension == 2:
+            f[:, 2] = 0.0
+        self.f = np.ascontiguousarray(np.concatenate([self.f, f]))
+        self.torque = np.ascontiguousarray(np.concatenate([self.torque, np.zeros((m, 3))]))
+        if self._wfriction:
+            self.whist = np.concatenate([self.whist, np.zeros((m * self.n_walls * 2, 3))])
+        self.x_ref = s.x.copy()
+        if self.sys[itg.RODS] or np.any(half > 0):
+            self.sys[itg.RODS] = 1.0
+            self.u_ref = s.u.copy()
+        # the new particles have empty rows in the old list: the springs carry over
+        self._istart = np.concatenate([self._istart, np.full(m, self._istart[-1])])
+        self._new_scratch()
+        self._rebuild()
+        ij, _ = self.contact_table()
+        hit = ij[(ij >= n0).any(axis=1)]
+        if len(hit):
+            raise ValueError(f"added particle (0-based) {int(hit[0].max())} touches particle "
+                             f"{int(hit[0].min())}; place it clear of every grain")
+        if self.n_walls:
+            iw, _ = self.wall_contact_table()
+            hit = iw[iw[:, 0] >= n0]
+            if len(hit):
+                raise ValueError(f"added particle (0-based) {int(hit[0, 0])} touches wall "
+                                 f"{int(hit[0, 1])}; place it clear of the walls")
+
     def set_drag(self, gamma_bg: float, gamma_rot: float):
         """Change the background drag on translation (force/velocity) and rotation
         (torque/angular velocity) from now on (the model keeps its own values; checkpoints

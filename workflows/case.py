@@ -311,6 +311,7 @@ def _check_case(case: dict, source: str, at: str):
     phi_end = {"compress": pr.get("phi_final"), "jammed": pr.get("phi_max"),
                "growth": pr.get("phi_max")}.get(pr["name"], 0.75)
     _derive_contact(case, source, at)
+    _stiffen_with_bond(case, source, at)
     _check_container(case, source, at)
     if pr["name"] == "compress":
         if pr["phi_final"] <= pr["phi_init"]:
@@ -469,6 +470,61 @@ def _check_preparation(pr: dict, source: str, at: str):
                           f"{prep['check_time']:g}; use max_time >= check_time")
 
 
+def _stiffen_with_bond(case: dict, source: str, at: str):
+    """``contact.bond_stiffening``: above the Bond number ``reference``, with ``s =
+    bond_number / reference``, multiply ``k_n`` and ``k_t`` by ``s``, ``gamma_n`` and
+    ``gamma_t`` by ``sqrt(s)`` and ``protocol.dt`` by ``s^(-2/5)`` (a Hertz contact pressed
+    by ``F_c = Bo_g m g`` then overlaps as at the reference; its period shrinks as
+    ``s^(-2/5)``), and record ``factor = s``. A case that has ``factor`` was stiffened
+    when it was first validated (its ``case.yaml`` is read again by the engines) and is
+    left as it is, once ``factor`` is checked against the Bond number."""
+    c = case["contact"]
+    st = c.get("bond_stiffening")
+    if st is None:
+        return
+    s = max(c.get("bond_number", 0.0) / st["reference"], 1.0)
+    if "factor" in st:
+        if not math.isclose(st["factor"], s, rel_tol=1e-12):
+            raise ConfigError(
+                f"{source}: {at}contact.bond_stiffening.factor = {st['factor']} does not match "
+                f"bond_number / reference = {s:.12g}; remove factor (validation writes it)")
+        return
+    for key in ("k_n", "k_t"):
+        c[key] = c[key] * s
+    for key in ("gamma_n", "gamma_t"):
+        c[key] = c[key] * math.sqrt(s)
+    case["protocol"]["dt"] = case["protocol"]["dt"] * s ** -0.4
+    st["factor"] = s
+
+
+def _check_feed(case: dict, source: str, at: str):
+    """``protocol.feed`` (deposits): 2-D only, not with the rain, at most one grain per
+    step, and an entry line that a grain fits under and that lies above the deposit even
+    at packing fraction 1."""
+    pr = case["protocol"]
+    feed = pr["feed"]
+    p = case["particles"]
+    if p["dimension"] != 2:
+        raise ConfigError(f"{source}: {at}protocol.feed is implemented in 2-D only (pysim); "
+                          f"got particles.dimension = {p['dimension']}: use dimension 2, or "
+                          "the random column (phi_init, rain_speed) in 3-D")
+    if "rain_speed" in pr:
+        raise ConfigError(f"{source}: {at}protocol.feed and protocol.rain_speed exclude each "
+                          "other (the feed replaces the raining column); remove one")
+    if feed["rate"] * pr["dt"] > 1.0:
+        raise ConfigError(f"{source}: {at}protocol.feed.rate = {feed['rate']} feeds more than "
+                          f"one grain per step (dt = {pr['dt']}); use rate <= {1.0 / pr['dt']:.6g}")
+    dmax = size_extremes(p["diameter"])[2]
+    reach = 0.5 * dmax * (1.0 + p["aspect_ratio"])
+    w = case["container"]["width"]
+    filled = p["n"] * particle_measure(size_extremes(p["diameter"])[1], p["aspect_ratio"], 2) / w
+    if feed["height"] <= filled + reach:
+        raise ConfigError(
+            f"{source}: {at}protocol.feed.height = {feed['height']} is not above the deposit "
+            f"even at packing fraction 1 ({filled:.4g}) plus half a grain ({reach:.4g}); use a "
+            f"height > {filled + reach:.4g} (above the expected deposit)")
+
+
 def _check_container(case: dict, source: str, at: str):
     """Container cases: tapping needs a 3-D cylinder, deposition a box, both gravity; the
     container must be wider than the longest grain; cohesion by a Bond number needs
@@ -518,6 +574,8 @@ def _check_container(case: dict, source: str, at: str):
         raise ConfigError(
             f"{source}: {at}container.{key} = {cont[key]} must exceed 1.5 times the "
             f"longest grain (L + D = {longest:.4g}); use a wider container")
+    if "feed" in pr:
+        _check_feed(case, source, at)
 
 
 def load_case(path) -> dict:

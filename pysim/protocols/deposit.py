@@ -13,11 +13,28 @@ grains' contact law (``contact.wall_friction``, default ``friction``). Cohesion:
 constant attraction ``F_c = Bo_g m g`` (mean grain) between grains whose gap is below
 ``d_c = cohesion_range D`` (:func:`cohesion`).
 
+**Feed** (``protocol.feed``, 2-D; the cohesive-deposit paper's protocol): instead of a
+column, grains enter one at a time at ``rate`` grains per unit time, grain ``k`` (in the
+order of the initial data file, :func:`pysim.initial.feed_queue`) at step
+``round(k / (rate dt))``, the first at step 0. Each enters with its centre on the line
+``y = feed.height`` above the base, at a uniformly random ``x`` that keeps it inside the
+side walls, a uniformly random orientation and a velocity of magnitude ``feed.speed`` in
+a uniformly random direction, no spin (:func:`entry`); a spot where it would touch a
+grain (gap not above the cohesion range) is drawn again, up to :data:`ENTRY_TRIES`
+times, else :class:`FeedBlockedError`. The draws of grain ``k`` come from its own stream
+(``default_rng([seed, k])``), so a resumed run draws the same. Grains not yet fed are not
+part of the simulation (:meth:`pysim.simulation.Simulation.add_particles`); frames hold
+the grains fed so far.
+
 The run ends at the first ``thermo.dat`` row (every ``output.thermo_every`` steps, after
-``min_time``) where the kinetic energy is below ``ke_ratio`` times its running peak, or
-at ``max_time``; ``run.json`` says which (``settled``). Frames every ``output.dump_every``
-steps and at the last step. Positions in the files are absolute; checkpoints and resume
-as in :mod:`pysim.protocols.tapping` (the peak kinetic energy is kept in the checkpoint).
+``min_time``, the rain and the feed) where the kinetic energy is below ``ke_ratio`` times
+its running peak, or at ``max_time``; ``run.json`` says which (``settled``). A fed run
+that reaches ``max_time`` unsettled (or not fully fed) stops with :class:`NotSettledError`
+and keeps its checkpoint at that step, so that the same command with a larger
+``max_time`` and ``--resume`` goes on as if it had been given from the start. Frames
+every ``output.dump_every`` steps and at the last step. Positions in the files are
+absolute; checkpoints and resume as in :mod:`pysim.protocols.tapping` (the peak kinetic
+energy is kept in the checkpoint).
 """
 from __future__ import annotations
 
@@ -78,16 +95,84 @@ def rain_steps(protocol: dict) -> int:
     return int(round(protocol.get("rain_time", 0.0) / protocol["dt"]))
 
 
+#: draws of an entry spot before a grain counts as blocked
+ENTRY_TRIES = 1000
+
+
+class FeedBlockedError(RuntimeError):
+    """A fed grain found no free spot on the entry line."""
+
+
+class NotSettledError(RuntimeError):
+    """A fed deposit reached ``max_time`` before it was fed and settled."""
+
+
+def entry_step(k: int, protocol: dict) -> int:
+    """The step at which fed grain ``k`` (0-based) enters: ``round(k / (rate dt))``."""
+    return int(round(k / (protocol["feed"]["rate"] * protocol["dt"])))
+
+
+def entry(case: dict, k: int, radius: float, length: float, lo, others) -> tuple:
+    """Entry of fed grain ``k`` (radius, spine length): ``(x (3,), axis (3,), v (3,))`` in
+    the simulation's coordinates (the container's shifted by ``-lo``). The centre sits at
+    ``feed.height`` above the base, ``x`` uniform over the positions that keep the grain
+    inside the side walls, the spine angle uniform in ``[0, pi)``, the velocity of
+    magnitude ``feed.speed`` at an angle uniform in ``[0, 2 pi)``. ``others`` = ``(x, u,
+    radius, half)`` of the grains already in: a draw whose spine comes within ``R_i + R_k
+    + d_c`` of another spine is drawn again."""
+    from pysim.geometry import segment_closest_many
+
+    feed = case["protocol"]["feed"]
+    w = case["container"]["width"]
+    d_c = cohesion_range(case)
+    h = 0.5 * length
+    rng = np.random.default_rng([int(case["seed"]), k])
+    ox, ou, orad, ohalf = others
+    for _ in range(ENTRY_TRIES):
+        theta = rng.uniform(0.0, math.pi)
+        u = np.array([math.cos(theta), math.sin(theta), 0.0])
+        side = radius + h * abs(u[0])  # centre to the far edge along x
+        x = np.array([rng.uniform(side, w - side), feed["height"], 0.0]) - lo
+        x[2] = 0.0
+        ang = rng.uniform(0.0, 2.0 * math.pi)
+        v = feed.get("speed", 0.0) * np.array([math.cos(ang), math.sin(ang), 0.0])
+        reach = orad + radius + d_c
+        near = np.flatnonzero(np.linalg.norm(ox - x, axis=1) < ohalf + h + reach)
+        if len(near):
+            m = len(near)
+            s, t = segment_closest_many(np.tile(x, (m, 1)), np.tile(u, (m, 1)), np.full(m, h),
+                                        ox[near], ou[near], ohalf[near])
+            gap = (x + s[:, None] * u) - (ox[near] + t[:, None] * ou[near])
+            if np.any(np.linalg.norm(gap, axis=1) <= reach[near]):
+                continue
+        return x, u, v
+    raise FeedBlockedError(
+        f"fed grain {k} found no free spot on the entry line y = {feed['height']:g} in "
+        f"{ENTRY_TRIES} draws (the deposit has reached it, or grains enter faster than they "
+        "clear it); raise protocol.feed.height or lower protocol.feed.rate")
+
+
+def cohesion_range(case: dict) -> float:
+    """``d_c`` of the case (0 without cohesion): the gap within which grains attract."""
+    return cohesion(case)[1]
+
+
 def simulation_from_case(case: dict, init: dict) -> Simulation:
     """The :class:`Simulation` of a deposition case: non-periodic box from the initial
     data file, gravity along the last axis, base and side walls (relative to the lower
-    box corner), cohesion from the Bond number."""
+    box corner), cohesion from the Bond number. A fed case starts with its first grain
+    alone, at its entry (:func:`entry`)."""
     dim = case["particles"].get("dimension", 3)
     lo = init["box_lo"].copy()
     box = init["box"].copy()
     x = init["x"] - lo
     axis = init["axis"].copy()
     v = init["v"].copy()
+    radius, length = init["radius"], init["length"]
+    if "feed" in case["protocol"]:
+        none = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0))
+        x, axis, v = (a[None, :] for a in entry(case, 0, radius[0], length[0], lo, none))
+        radius, length = radius[:1], length[:1]
     if dim == 2:
         lo[2] = 0.0
         box[2] = 0.0
@@ -95,7 +180,7 @@ def simulation_from_case(case: dict, init: dict) -> Simulation:
         axis[:, 2] = 0.0
         axis /= np.linalg.norm(axis, axis=1, keepdims=True)
         v[:, 2] = 0.0
-    state = State.create(x, init["radius"], init["length"], box, axis=axis, v=v,
+    state = State.create(x, radius, length, box, axis=axis, v=v,
                          density=case["particles"].get("density", 1.0),
                          periodic=(False, False, False), dimension=dim)
     c = case["contact"]
@@ -139,6 +224,11 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     ratio = pr.get("ke_ratio", 1e-6)
     rain_end = rain_steps(pr)
     drag = rain_drag(case)
+    n_all = len(init["ids"])
+    fed = "feed" in pr
+    if fed:  # end on a thermo row: a resume with a larger max_time then writes the same
+        max_steps = -(-max_steps // thermo_every) * thermo_every
+    feed_end = entry_step(n_all - 1, pr) if fed else 0
     files = RunFiles(out_dir, init["ids"], origin=init["box_lo"])
     if resume:
         sim, drv = files.resume()
@@ -147,11 +237,16 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
         files.start()
         drv = {"peak": 0.0}
     s = sim.state
+    lo = init["box_lo"]
+
+    def next_entry():
+        return entry_step(s.n, pr) if fed and s.n < n_all else None
     free = (sim.model.gamma_bg, sim.model.gamma_rot)  # the case's own drag, after the rain
     sim.set_drag(*(drag if s.step < rain_end else free))
     t0 = time.perf_counter()
     last_ckpt = t0
     steps_at_start = s.step
+    grain_steps = 0
     settled = False
     bar = tqdm(total=max_steps, initial=s.step, disable=not progress, unit="step",
                mininterval=1.0, desc="pysim deposit", dynamic_ncols=True)
@@ -167,19 +262,36 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
                       (s.step // dump_every + 1) * dump_every)
             if s.step < rain_end:
                 nxt = min(nxt, rain_end)
+            k_in = next_entry()
+            if k_in is not None:
+                nxt = min(nxt, k_in)
             before = s.step
             sim.run(nxt - s.step)
+            grain_steps += s.n * (s.step - before)
             if s.step == rain_end:
                 sim.set_drag(*free)
+            if s.step == k_in:
+                k = s.n
+                others = (s.x, s.u, s.radius, sim.half)
+                x, u, v = entry(case, k, init["radius"][k], init["length"][k], lo, others)
+                sim.add_particles(x[None, :], init["radius"][k], init["length"][k], u[None, :],
+                                  v[None, :])
             bar.update(s.step - before)
             if s.step % thermo_every == 0 or s.step == max_steps:
                 th = sim.thermo()
                 drv["peak"] = max(drv["peak"], th.ke)
                 files.thermo((th.step, th.time, math.nan, math.nan, th.ke, th.pe, th.n_contacts))
                 bar.set_postfix(ke=f"{th.ke:.3g}", peak=f"{drv['peak']:.3g}", refresh=False)
-                settled = s.step >= max(min_steps, rain_end) and th.ke < ratio * drv["peak"]
-            if s.step % dump_every == 0 or settled or s.step == max_steps:
+                settled = (s.step >= max(min_steps, rain_end, feed_end) and s.n == n_all
+                           and th.ke < ratio * drv["peak"])
+            natural = s.step % dump_every == 0 or settled
+            if natural:
                 files.dump(sim)
+            if s.step == max_steps and not settled:
+                if fed:  # a resume with a larger max_time goes on from here, without the
+                    files.checkpoint(sim, drv)  # extra last frame below
+                if not natural:
+                    files.dump(sim)
             if settled:
                 break
             if time.perf_counter() - last_ckpt > checkpoint_every:
@@ -190,6 +302,14 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     finally:
         bar.close()
         files.close()
+    if fed and not settled:
+        th = sim.thermo()
+        why = (f"only {s.n} of {n_all} grains were fed" if s.n < n_all else
+               f"the kinetic energy is {th.ke / drv['peak']:.3g} of its peak, above ke_ratio "
+               f"{ratio:g}")
+        raise NotSettledError(f"the fed deposit did not settle by max_time = {pr['max_time']:g} "
+                              f"(step {s.step}): {why}; raise protocol.max_time and run again "
+                              f"with --resume (the checkpoint {files.ckpt} is at that step)")
     wall = time.perf_counter() - t0
     files.finalize()
     th = sim.thermo()
@@ -197,5 +317,5 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     return {"steps": s.step, "wall_seconds": wall, "settled": bool(settled),
             "ke_peak": drv["peak"], "ke_ratio": th.ke / drv["peak"] if drv["peak"] > 0 else 0.0,
             "final": {"step": th.step, "time": th.time, "ke": th.ke, "n_contacts": th.n_contacts},
-            "particle_steps_per_second": s.n * done / wall if wall > 0 else float("nan"),
+            "particle_steps_per_second": grain_steps / wall if wall > 0 else float("nan"),
             "neighbor_rebuilds": sim.rebuilds, "resumed": bool(resume)}

@@ -74,15 +74,16 @@ class RunFiles:
             axis[:, 2] = 0.0
             axis /= np.linalg.norm(axis, axis=1, keepdims=True)
         shifted = bool(np.any(self.origin != 0.0))
-        io.write_particles_frame(self.fh["particles.dump"], s.step, s.box, s.periodic, self.ids,
-                                 self.types, s.x + self.origin if shifted else s.x, s.radius,
+        ids = self.ids[:s.n]  # a fed run holds the first n grains so far
+        io.write_particles_frame(self.fh["particles.dump"], s.step, s.box, s.periodic, ids,
+                                 self.types[:s.n], s.x + self.origin if shifted else s.x, s.radius,
                                  axis=axis if rods else None, length=s.length if rods else None,
                                  box_lo=self.origin)
         ij, rec = sim.contact_table()
-        ij_ids = self.ids[ij]
+        ij_ids = ids[ij]
         if sim.n_walls:
             iw, wrec = sim.wall_contact_table()
-            wall_ids = np.column_stack([self.ids[iw[:, 0]], -(iw[:, 1] + 1)])
+            wall_ids = np.column_stack([ids[iw[:, 0]], -(iw[:, 1] + 1)])
             ij_ids = np.vstack([ij_ids, wall_ids])
             rec = np.vstack([rec, wrec])
         if shifted:

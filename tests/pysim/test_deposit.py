@@ -158,3 +158,195 @@ def test_rain_needs_its_speed_and_time():
         validate_case(with_(protocol__rain_time=20.0))
     with pytest.raises(ConfigError, match="rain_time"):
         validate_case(with_(protocol__rain_speed=1.0))
+
+
+# -- the feed (protocol.feed, 2-D): grains enter one at a time at the top of the box ------
+FEED = {
+    "particles": {"n": 24, "dimension": 2, "aspect_ratio": 1.0,
+                  "diameter": {"distribution": "mono", "mean": 1.0}, "density": 1.0},
+    "contact": {"law": "hertz", "k_n": 1e6, "gamma_n": 300.0, "k_t": 1e5, "gamma_t": 100.0,
+                "friction": 0.5},
+    "container": {"shape": "box", "width": 8.0},
+    "gravity": 4.0,
+    "protocol": {"name": "deposit", "dt": 2e-4, "ke_ratio": 1e-6, "max_time": 60.0,
+                 "feed": {"rate": 2.0, "height": 12.0, "speed": 0.5}},
+    "output": {"thermo_every": 500, "dump_every": 2500},
+    "seed": 7,
+}
+
+
+def fed(**changes):
+    case = copy.deepcopy(FEED)
+    for path, value in changes.items():
+        *head, last = path.split("__")
+        d = case
+        for k in head:
+            d = d[k]
+        d[last] = value
+    return case
+
+
+def pysim_cli(case, data, out, *extra):
+    """``python -m pysim run`` of ``case`` (written beside ``out``); the finished process."""
+    import subprocess
+    import sys
+
+    import yaml
+
+    cp = out.parent / f"{out.name}.yaml"
+    cp.write_text(yaml.safe_dump(validate_case(case)))
+    return subprocess.run([sys.executable, "-m", "pysim", "run", str(cp), "--data", str(data),
+                           "--out", str(out), "--no-progress", *extra],
+                          capture_output=True, text=True)
+
+
+@pytest.fixture(scope="module")
+def fed_run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("fed")
+    return validate_case(FEED), run_case(d, FEED)
+
+
+def test_grains_enter_at_the_rate_asked(fed_run):
+    """Grain k enters at t = k / rate: at 2 grains per unit time and dt = 2e-4, one every
+    2500 steps, so the frame at step s (every 2500 steps) holds s / 2500 + 1 grains, the
+    first ones of the data file."""
+    case, run_dir = fed_run
+    frames = RunData(run_dir).frames()
+    ids = read_particle_data(run_dir.parent / "init.data")["ids"]
+    counts = []
+    for frame, _ in frames:
+        n = min(frame.step // 2500 + 1, case["particles"]["n"])
+        counts.append(len(frame.x))
+        assert len(frame.x) == n, frame.step
+        np.testing.assert_array_equal(np.sort(frame.ids), np.sort(ids)[:n])
+    assert counts[0] == 1 and counts[-1] == case["particles"]["n"]
+
+
+def test_fed_deposit_settles_inside_the_box(fed_run):
+    case, run_dir = fed_run
+    meta = json.loads((run_dir / "run.json").read_text())
+    assert meta["settled"] and meta["ke_ratio"] < 1e-6
+    frame, contacts = RunData(run_dir).frames()[-1]
+    assert len(frame.x) == case["particles"]["n"]
+    w, top = case["container"]["width"], case["protocol"]["feed"]["height"]
+    ends = np.concatenate([frame.x + 0.5 * frame.length[:, None] * frame.axis,
+                           frame.x - 0.5 * frame.length[:, None] * frame.axis])
+    r = np.tile(frame.radius, 2)
+    assert np.all(ends[:, 0] - r > -0.01) and np.all(ends[:, 0] + r < w + 0.01)
+    assert np.all(ends[:, 1] - r > -0.01) and np.all(ends[:, 1] + r < top)
+    assert np.all(contacts.overlap < 0.02)
+    # at rest the walls carry the weight of every grain (2-D: the base is wall id -3)
+    weight = frame.particle_measures().sum() * case["gravity"]
+    assert contacts.force[contacts.j < 0, 1].sum() == pytest.approx(weight, rel=0.01)
+
+
+@pytest.mark.parametrize("bond_number", [0.0, 100.0])
+def test_grains_enter_clear_of_everything(bond_number):
+    """Entry spots: on the entry line, inside the side walls, and never within R_i + R_k +
+    d_c of another grain (checked by brute-force sampling of the spines), even with the
+    line crowded by grains left where they entered; a large cohesion range (0.3 D) makes
+    the margin count."""
+    from pysim.geometry import segment_distance_bruteforce
+    from pysim.protocols.deposit import cohesion_range, entry
+
+    case = validate_case(fed(contact__bond_number=bond_number, contact__cohesion_range=0.3))
+    d_c = cohesion_range(case)
+    assert d_c == (0.3 if bond_number else 0.0)
+    w, height = case["container"]["width"], case["protocol"]["feed"]["height"]
+    lo = np.array([-2.0, -2.0, -0.5])
+    rng = np.random.default_rng(1)
+    m = 3  # grains around the line, as if they had not moved since they entered
+    ang = rng.uniform(0, np.pi, m)
+    ox = np.column_stack([rng.uniform(1.5, w - 1.5, m), height + rng.uniform(-1.0, 1.0, m),
+                          np.zeros(m)]) - lo
+    ox[:, 2] = 0.0
+    ou = np.column_stack([np.cos(ang), np.sin(ang), np.zeros(m)])
+    others = (ox, ou, np.full(m, 0.5), np.full(m, 0.5))
+    speeds = []
+    for k in range(100):
+        x, u, v = entry(case, k, 0.5, 1.0, lo, others)
+        assert x[1] + lo[1] == pytest.approx(height) and x[2] == 0.0
+        ends = [x + 0.5 * u, x - 0.5 * u]
+        assert all(0.5 <= e[0] + lo[0] <= w - 0.5 for e in ends)
+        for j in range(m):
+            gap = segment_distance_bruteforce(x, u, 0.5, ox[j], ou[j], 0.5) - 1.0
+            assert gap > d_c - 1e-3, (k, j, gap)
+        speeds.append(np.linalg.norm(v))
+        # the same grain draws the same entry (a resumed run)
+        x2, u2, v2 = entry(case, k, 0.5, 1.0, lo, others)
+        assert np.array_equal(x, x2) and np.array_equal(u, u2) and np.array_equal(v, v2)
+    np.testing.assert_allclose(speeds, 0.5)
+
+
+def test_a_full_entry_line_is_a_clear_error():
+    from pysim.protocols.deposit import FeedBlockedError, entry
+
+    case = validate_case(FEED)
+    w, height = case["container"]["width"], case["protocol"]["feed"]["height"]
+    lo = np.zeros(3)
+    xs = np.arange(1.0, w, 1.5)  # flat grains end to end along the line
+    ox = np.column_stack([xs, np.full(len(xs), height), np.zeros(len(xs))])
+    ou = np.tile([1.0, 0.0, 0.0], (len(xs), 1))
+    others = (ox, ou, np.full(len(xs), 0.5), np.full(len(xs), 0.5))
+    with pytest.raises(FeedBlockedError, match=r"fed grain 3 found no free spot on the entry "
+                                               r"line y = 12 .*raise protocol\.feed\.height"):
+        entry(case, 3, 0.5, 1.0, lo, others)
+
+
+def test_fed_run_resumes_bit_identically(fed_run, tmp_path):
+    """A fed run stopped by its max_time in mid-feed is an error naming what to do, and
+    keeps its checkpoint; the same run with the full max_time and --resume writes the
+    bytes of the uninterrupted run."""
+    case, ref = fed_run
+    data = ref.parent / "init.data"
+    out = tmp_path / "out"
+    short = pysim_cli(fed(protocol__max_time=5.0), data, out)
+    assert short.returncode == 3
+    line = short.stderr.strip()
+    assert "\n" not in line and "Traceback" not in line
+    assert "did not settle by max_time = 5 (step 25000): only 11 of 24 grains were fed" in line
+    assert "--resume" in line and (out / "checkpoint.npz").exists()
+    again = pysim_cli(FEED, data, out, "--resume")
+    assert again.returncode == 0, again.stderr
+    for name in ("particles.dump", "contacts.dump", "thermo.dat"):
+        assert (out / name).read_bytes() == (ref / name).read_bytes(), name
+
+
+def test_add_particles_keeps_the_springs_and_refuses_overlaps():
+    """Simulation.add_particles: a grain added far from a frictional pair in contact
+    changes neither the pair's tangential spring nor its motion; one added onto a grain
+    or a wall is refused."""
+    from pysim import walls
+    from pysim.simulation import ContactModel, Simulation
+    from pysim.state import State
+
+    def pair():
+        x = np.array([[3.0, 0.52, 0.0], [3.4, 1.925, 0.0]])
+        st = State.create(x, 0.5, 1.0, np.array([20.0, 20.0, 0.0]),
+                          axis=[[1.0, 0.0, 0.0], [0.6, 0.8, 0.0]], periodic=(False,) * 3,
+                          dimension=2)
+        st.v[:, 0] = [0.3, -0.2]
+        model = ContactModel("hertz", 1e5, 30.0, k_t=1e4, gamma_t=10.0, mu=0.5)
+        return Simulation(st, model, dt=1e-4, gravity=(0, -10.0, 0),
+                          planes=[walls.plane((0, 1, 0), (0, 0, 0)),
+                                  walls.plane((1, 0, 0), (0, 0, 0))])
+
+    a, b = pair(), pair()
+    a.run(3000)
+    b.run(3000)
+    assert np.abs(a.hist).max() > 0 and np.abs(a.whist).max() > 0
+    hist, whist = a.hist.copy(), a.whist.copy()
+    a.add_particles([[15.0, 10.0, 0.0]], 0.5, 1.0, [[0.0, 1.0, 0.0]], [[0.0, -1.0, 0.0]])
+    assert a.state.n == 3 and a.f[2, 1] == pytest.approx(-10.0 * a.state.mass[2])
+    np.testing.assert_array_equal(a.hist, hist)
+    np.testing.assert_array_equal(a.whist[:len(whist)], whist)
+    a.run(2000)
+    b.run(2000)
+    np.testing.assert_allclose(a.state.x[:2], b.state.x, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a.state.x[2, 1], 10.0 - 0.2 - 0.5 * 10.0 * 0.2**2, atol=1e-9)
+    with pytest.raises(ValueError, match=r"added particle \(0-based\) 3 touches particle 1"):
+        a.add_particles([[a.state.x[1, 0], a.state.x[1, 1] + 0.9, 0.0]], 0.5, 1.0,
+                        [[1.0, 0.0, 0.0]])
+    c = pair()
+    with pytest.raises(ValueError, match=r"added particle \(0-based\) 2 touches wall 1"):
+        c.add_particles([[0.3, 8.0, 0.0]], 0.5, 1.0, [[1.0, 0.0, 0.0]])

@@ -311,3 +311,66 @@ def test_wall_friction_alone_gets_the_derived_tangential_spring():
     with pytest.raises(ConfigError, match=r"contact\.k_t = 0\.0 must be > 0 when wall_friction "
                                           r"= 0\.3 > 0"):
         validate_case(with_value(("contact", "wall_friction"), 0.3), "case.yaml")
+
+
+def feed_case(**changes):
+    from tests.pysim.test_deposit import FEED
+
+    return changed(FEED, **changes)
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"particles__dimension": 3}, r"protocol\.feed is implemented in 2-D only \(pysim\); got "
+                                  r"particles\.dimension = 3"),
+    ({"protocol__rain_speed": 1.0, "protocol__rain_time": 5.0},
+     r"protocol\.feed and protocol\.rain_speed exclude each other"),
+    ({"protocol__feed__rate": 6000.0}, r"protocol\.feed\.rate = 6000\.0 feeds more than one "
+                                       r"grain per step \(dt = 0\.0002\); use rate <= 5000"),
+    ({"protocol__feed__rate": 0.0}, r"protocol\.feed\.rate = 0\.0 is not allowed; use a number "
+                                    r"> 0"),
+    ({"protocol__feed__rate": KeyError}, r"missing key 'protocol\.feed\.rate'"),
+    ({"protocol__feed__height": KeyError}, r"missing key 'protocol\.feed\.height'"),
+    ({"protocol__feed__speed": -1.0}, r"protocol\.feed\.speed = -1\.0 .*>= 0"),
+    ({"protocol__feed__gap": 1.0}, r"unknown key 'protocol\.feed\.gap'; allowed here: height, "
+                                   r"rate, speed"),
+    ({"protocol__feed__height": 6.0}, r"protocol\.feed\.height = 6\.0 is not above the deposit "
+                                      r"even at packing fraction 1 \(5\.356\) plus half a grain "
+                                      r"\(1\); use a height > 6\.356"),
+])
+def test_bad_feed_cases(changes, message):
+    with pytest.raises(ConfigError, match=message) as exc:
+        validate_case(feed_case(**changes), "case.yaml")
+    assert "\n" not in str(exc.value) and str(exc.value).startswith("case.yaml: ")
+
+
+def test_bond_stiffening_is_off_unless_asked():
+    """contact.bond_stiffening: absent, the law is the case's at every Bond number."""
+    case = validate_case(dep_case(contact__bond_number=1e4))
+    c = case["contact"]
+    assert (c["k_n"], c["k_t"], c["gamma_n"], c["gamma_t"]) == (1e6, 1e5, 300.0, 100.0)
+    assert case["protocol"]["dt"] == 1e-4 and "bond_stiffening" not in c
+
+
+def test_bond_stiffening_scales_the_law_once():
+    """Above the reference Bond number, s = Bo_g / reference: k_n, k_t times s, the
+    dampings times sqrt(s), dt times s^(-2/5) (deposition.yaml's hand-stiffened Bo_g = 1e4
+    variants: 1e8, 1e7, 3000, 1000 and 1.6e-5 from s = 100); validating the stiffened case
+    again (the engines read case.yaml back) changes nothing; below the reference nothing
+    changes; a factor that does not match is an error."""
+    case = validate_case(dep_case(contact__bond_number=1e4,
+                                  contact__bond_stiffening={"reference": 100.0}))
+    c = case["contact"]
+    assert c["k_n"] == pytest.approx(1e8) and c["k_t"] == pytest.approx(1e7)
+    assert c["gamma_n"] == pytest.approx(3000.0) and c["gamma_t"] == pytest.approx(1000.0)
+    assert case["protocol"]["dt"] == pytest.approx(1e-4 * 100 ** -0.4)
+    assert case["protocol"]["dt"] == pytest.approx(1.6e-5, rel=0.01)
+    assert c["bond_stiffening"] == {"reference": 100.0, "factor": 100.0}
+    assert validate_case(case) == case
+    weak = validate_case(dep_case(contact__bond_number=50.0,
+                                  contact__bond_stiffening={"reference": 100.0}))
+    assert weak["contact"]["k_n"] == 1e6 and weak["contact"]["bond_stiffening"]["factor"] == 1.0
+    bad = copy.deepcopy(case)
+    bad["contact"]["bond_number"] = 1e3
+    with pytest.raises(ConfigError, match=r"contact\.bond_stiffening\.factor = 100\.0 does not "
+                                          r"match bond_number / reference = 10; remove factor"):
+        validate_case(bad, "case.yaml")

@@ -72,8 +72,10 @@ def restitution_case():
 
 
 #: case parameters a deposition study derives from its Bond number (the law stiffened with
-#: the cohesion) or does not analyse
-FOLLOW_BOND_NUMBER = {"k_n", "k_t", "gamma_n", "gamma_t", "dt", "thermo_every", "dump_every"}
+#: the cohesion, by hand or by contact.bond_stiffening, whose 'factor' is s) or does not
+#: analyse
+FOLLOW_BOND_NUMBER = {"k_n", "k_t", "gamma_n", "gamma_t", "dt", "thermo_every", "dump_every",
+                      "factor"}
 
 
 def deposit_trend(study):
