@@ -245,7 +245,6 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     sim.set_drag(*(drag if s.step < rain_end else free))
     t0 = time.perf_counter()
     last_ckpt = t0
-    steps_at_start = s.step
     grain_steps = 0
     settled = False
     bar = tqdm(total=max_steps, initial=s.step, disable=not progress, unit="step",
@@ -313,7 +312,6 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     wall = time.perf_counter() - t0
     files.finalize()
     th = sim.thermo()
-    done = s.step - steps_at_start
     return {"steps": s.step, "wall_seconds": wall, "settled": bool(settled),
             "ke_peak": drv["peak"], "ke_ratio": th.ke / drv["peak"] if drv["peak"] > 0 else 0.0,
             "final": {"step": th.step, "time": th.time, "ke": th.ke, "n_contacts": th.n_contacts},

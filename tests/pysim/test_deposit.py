@@ -4,9 +4,14 @@ analysis (apparent mass at the base, Janssen profile)."""
 import copy
 import json
 import math
+import os
+import signal
+import subprocess
+import sys
 
 import numpy as np
 import pytest
+import yaml
 
 from analysis.io import RunData
 from analysis.summary import analyse_deposit
@@ -30,8 +35,9 @@ DEP = {
 }
 
 
-def with_(**changes):
-    case = copy.deepcopy(DEP)
+def changed(base: dict, **changes) -> dict:
+    """A deep copy of ``base`` with ``a__b=value`` set at ``base[a][b]``."""
+    case = copy.deepcopy(base)
     for path, value in changes.items():
         *head, last = path.split("__")
         d = case
@@ -39,6 +45,10 @@ def with_(**changes):
             d = d[k]
         d[last] = value
     return case
+
+
+def with_(**changes):
+    return changed(DEP, **changes)
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -176,23 +186,11 @@ FEED = {
 
 
 def fed(**changes):
-    case = copy.deepcopy(FEED)
-    for path, value in changes.items():
-        *head, last = path.split("__")
-        d = case
-        for k in head:
-            d = d[k]
-        d[last] = value
-    return case
+    return changed(FEED, **changes)
 
 
 def pysim_cli(case, data, out, *extra):
     """``python -m pysim run`` of ``case`` (written beside ``out``); the finished process."""
-    import subprocess
-    import sys
-
-    import yaml
-
     cp = out.parent / f"{out.name}.yaml"
     cp.write_text(yaml.safe_dump(validate_case(case)))
     return subprocess.run([sys.executable, "-m", "pysim", "run", str(cp), "--data", str(data),
@@ -350,3 +348,23 @@ def test_add_particles_keeps_the_springs_and_refuses_overlaps():
     c = pair()
     with pytest.raises(ValueError, match=r"added particle \(0-based\) 2 touches wall 1"):
         c.add_particles([[0.3, 8.0, 0.0]], 0.5, 1.0, [[1.0, 0.0, 0.0]])
+
+
+def test_fed_run_killed_and_resumed_writes_the_same_bytes(fed_run, tmp_path):
+    """kill -9 in mid-feed (a checkpoint after every chunk), then --resume: the files of
+    the uninterrupted run."""
+    from tests.pysim.test_checkpoint import pysim_run, start_mid_run
+
+    _, ref = fed_run
+    cp = tmp_path / "case.yaml"
+    cp.write_text(yaml.safe_dump(validate_case(FEED)))
+    out = tmp_path / "killed"
+    proc = start_mid_run(cp, ref.parent / "init.data", out)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert not (out / "thermo.dat").exists(), "the run finished before it could be killed"
+    again = subprocess.run(pysim_run(cp, ref.parent / "init.data", out, "--resume"),
+                           capture_output=True, text=True)
+    assert again.returncode == 0, again.stderr
+    for name in ("particles.dump", "contacts.dump", "thermo.dat"):
+        assert (out / name).read_bytes() == (ref / name).read_bytes(), name
