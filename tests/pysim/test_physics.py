@@ -354,11 +354,12 @@ def test_rod_blow_up_is_reported_with_the_overlap_of_the_last_forces(spine_conta
     (``closest``) or the check had to search the pairs itself (``end_bonds``)."""
     from pysim.contacts import worst_overlap
 
-    x = np.array([[2.0, 3.0, 3.0], [3.02, 3.0, 3.0], [5.0, 5.0, 1.0]])
+    # in 2-D, where end_bonds is allowed (3-D rods refuse it: crossed rods would pass)
+    x = np.array([[2.0, 3.0, 0.0], [3.02, 3.0, 0.0], [5.0, 6.0, 0.0]])
     axis = np.tile([0.0, 1.0, 0.0], (3, 1))
     v = np.array([[10.0, 0, 0], [-10.0, 0, 0], [0, 0, 0]])
-    st = State.create(x, np.full(3, 0.5), np.array([2.0, 2.0, 0.0]), np.full(3, 8.0),
-                      axis=axis, v=v)
+    st = State.create(x, np.full(3, 0.5), np.array([2.0, 2.0, 0.0]), [8.0, 8.0, 1.0],
+                      axis=axis, v=v, periodic=(True, True, False), dimension=2)
     sim = Simulation(st, ContactModel("hooke", 1e3, 0.0, spine_contact=spine_contact),
                      dt=1e-3, max_overlap=0.5)
     sim.run(10)  # below the limit: no error

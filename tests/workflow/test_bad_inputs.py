@@ -54,7 +54,7 @@ CASES = [
     (("contact", "friction"), -0.1,
      "contact.friction = -0.1 is not allowed; use a number >= 0 and <= 10"),
     (("contact", "stiffness"), 5,
-     "unknown key 'contact.stiffness'; allowed here: bond_number, cohesion_range, contact_time, "
+     "unknown key 'contact.stiffness'; allowed here: bond_number, bond_stiffening, cohesion_range, contact_time, "
      "friction, gamma_bg, gamma_n, "
      "gamma_rot, gamma_t, k_n, k_t, law, limit_damping, max_overlap, restitution, "
      "spine_contact, tangential_spring, wall_friction"),
