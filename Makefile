@@ -53,8 +53,11 @@ run: setup
 stop:
 	$(PY) -m workflows.scripts.stop
 
+# two workers (one per core), each test file on one worker so a module's fixtures are
+# built once; TEST_WORKERS=0 runs in this process
+TEST_WORKERS ?= 2
 test: setup
-	$(VENV)/bin/pytest -q
+	$(VENV)/bin/pytest -q -n $(TEST_WORKERS) --dist loadfile
 
 doctor: setup
 	$(PY) -m workflows.doctor

@@ -2,6 +2,7 @@
 run only with ``--validate``; tests that need an engine binary skip without it."""
 from __future__ import annotations
 
+import os
 import shutil
 
 import numpy as np
@@ -10,6 +11,16 @@ import pytest
 
 def pytest_addoption(parser):
     parser.addoption("--validate", action="store_true", help="also run long validations")
+
+
+def pytest_configure(config):
+    # Under pytest-xdist each worker is its own process: two workers with two Numba
+    # threads each would put four spinning OpenMP threads on two cores. Tests that need
+    # two threads set them and restore this.
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        from pysim.jit import set_threads
+
+        set_threads(1)
 
 
 def pytest_collection_modifyitems(config, items):
