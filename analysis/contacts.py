@@ -299,8 +299,7 @@ def geometric_contacts(frame: Frame, tolerance: float = 0.0) -> Contacts:
     overlaps ``delta = R_i + R_j - d`` may be negative down to ``-tolerance``.
 
     Spheres use centre distances (scipy cKDTree); spherocylinders the closest points of
-    their spines (:func:`analysis.geometry.spine_closest`, i.e.
-    :func:`pysim.geometry.segment_closest_many`). Normal from the closest point on ``i``
+    their spines (:func:`analysis.geometry.spine_closest`). Normal from the closest point on ``i``
     to that on ``j``; contact point ``p_i + (R_i - delta/2) n``.
     """
     if tolerance < 0:

@@ -256,8 +256,7 @@ def tidy(rows, study, case, engine, seed, parameters: dict | None = None) -> pd.
     return df
 
 
-def analyse_jammed(run_dir, c_min: int | None = None, energy_target: float | None = None,
-                   friction: float = 0.0):
+def analyse_jammed(run_dir, c_min: int | None = None, friction: float = 0.0):
     """Observables of a mechanically stable packing (pysim's ``jammed`` protocol).
 
     ``phi_j`` comes from ``jammed.json``; the residual forces and torques of the
@@ -268,13 +267,9 @@ def analyse_jammed(run_dir, c_min: int | None = None, energy_target: float | Non
     contact once: ``z_tilde``), ``z_j_bonds`` (2-D parallel side contacts counted twice),
     the fractions of tip-tip, tip-side and side-side contacts, and the orientational
     order ``s2``, ``s4`` (2-D) or ``s_nematic`` (3-D) of the final frame. ``converged``
-    is pysim's verdict, or, given the case's ``energy_target``, that of
-    :func:`pysim.protocols.jammed.is_converged` on the record (the same rule for records
-    written before it changed).
+    is the record's own verdict (``jammed.json``, ``docs/formats.md``).
     """
     import json
-
-    from pysim.protocols.jammed import is_converged
 
     from analysis.balance import ForceBalance
     from analysis.contacts import TYPE_NAMES, ContactTypes
@@ -297,8 +292,7 @@ def analyse_jammed(run_dir, c_min: int | None = None, energy_target: float | Non
             ("torque_residual_split_max", bal.torque_split_max, np.nan),
             ("kink_contacts", float(bal.n_kink), np.nan),
             ("bisections", float(res["bisections"]), np.nan),
-            ("converged", float(res["converged"] if energy_target is None
-                                else is_converged(res, energy_target)), np.nan)]
+            ("converged", float(res["converged"]), np.nan)]
     if np.any(frame.length > 0):
         types = ContactTypes().compute(frame, contacts)
         rows += [(f"fraction_{k.replace('-', '_')}", float(v), np.nan)

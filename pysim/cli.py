@@ -27,7 +27,7 @@ from pysim.initial import write_initial
 
 
 def main(argv=None) -> int:
-    from workflows.case import ConfigError, load_case
+    from rodcase.case import ConfigError, load_case
 
     from pysim.io import DataFileError
 
@@ -105,7 +105,7 @@ def _run(case, init, args) -> int:
     from pysim.protocols import compress, deposit, growth, jammed, tapping
     from pysim.protocols.output import ResumeError
     from pysim.simulation import BlowUpError
-    from workflows import provenance
+    from rodcase import record
 
     args.out.mkdir(parents=True, exist_ok=True)
     driver = {"compress": compress, "growth": growth, "jammed": jammed,
@@ -131,8 +131,8 @@ def _run(case, init, args) -> int:
         print(f"stopped by Ctrl-C: {where}; run the same command with --resume to go on",
               file=sys.stderr)
         return 130
-    provenance.write(args.out / "run.json",
-                     provenance.record("pysim", pysim.__version__, case, status="ok",
+    record.write(args.out / "run.json",
+                     record.make("pysim", pysim.__version__, case, status="ok",
                                        threads=get_threads(), **summary))
     return 0
 

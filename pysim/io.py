@@ -9,7 +9,8 @@ Every engine leaves, per run directory:
 * ``thermo.dat``     - whitespace table with a ``# step time phi ...`` header
   (:data:`THERMO_COLUMNS`).
 
-Files are written to ``<name>.part`` and renamed when complete (:func:`finalize`).
+Files are written to ``<name>.part`` and renamed when complete
+(:func:`rodcase.files.finalize`).
 Also here: LAMMPS data files, the shared initial configuration.
 """
 from __future__ import annotations
@@ -18,6 +19,8 @@ import os
 from pathlib import Path
 
 import numpy as np
+
+from rodcase.files import atomic_write_text, finalize, part_path  # noqa: F401 (used here too)
 
 PARTICLE_COLUMNS = ("id", "type", "x", "y", "z", "radius")
 ROD_COLUMNS = ("ux", "uy", "uz", "length")
@@ -76,30 +79,6 @@ def write_thermo_row(fh, row):
     """Append one thermo row ``(step, time, phi, pressure, ke, pe, n_contacts)``."""
     step, time, phi, p, ke, pe, nc = row
     fh.write(f"{int(step)} {time:.10g} {phi:.10g} {p:.10g} {ke:.10g} {pe:.10g} {int(nc)}\n")
-
-
-def part_path(path) -> Path:
-    """Temporary name a file is written under until :func:`finalize`."""
-    path = Path(path)
-    return path.with_name(path.name + ".part")
-
-
-def finalize(path):
-    """Atomically move ``<path>.part`` to ``path`` (after flushing it to disk)."""
-    tmp = part_path(path)
-    with open(tmp, "rb+") as fh:
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
-
-
-def atomic_write_text(path, text: str):
-    """Write ``text`` to ``path`` atomically (temporary file, fsync, rename)."""
-    tmp = part_path(path)
-    with open(tmp, "w") as fh:
-        fh.write(text)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
 
 
 # -- LAMMPS data files -------------------------------------------------------------------

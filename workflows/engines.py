@@ -131,7 +131,7 @@ def glued_spheres(length: float, diameter: float, spacing: float) -> int:
 def _rod_vars(case: dict) -> dict:
     """Spheres per glued rod and the ghost cutoff ``fix rigid/small`` needs (a body
     reaches as far as its length from its owner atom)."""
-    from workflows.case import size_extremes
+    from rodcase.case import size_extremes
 
     p = case["particles"]
     d = p["diameter"]["mean"]
@@ -408,7 +408,7 @@ def settle_column_height(case: dict) -> float:
     """Height of the column LIGGGHTS inserts the settling rods into (length): the rod
     volume fills :data:`PHI_INSERT_SETTLE` of the part of it their centres can use (a
     square of side ``W - (L + D)``), plus one rod length ``L + D``."""
-    from workflows.case import particle_measure
+    from rodcase.case import particle_measure
 
     p = case["particles"]
     plan = settle_plan(case)
@@ -498,7 +498,7 @@ RHO_2D = 0.05
 def deck_vars_2d(case: dict) -> dict[str, str]:
     """``-var`` values of ``in.2d.compress`` (see its header): the harmonic law, the drag
     per area, the two radii, disks per rod and the stages of the overdamped protocol."""
-    from workflows.case import particle_measure, size_extremes
+    from rodcase.case import particle_measure, size_extremes
 
     p, c, pr = case["particles"], case["contact"], case["protocol"]
     out = case.get("output", {})
@@ -566,7 +566,7 @@ def _deck_vars(case: dict, engine: str) -> dict[str, str]:
     if "pressure_final" in pr:
         v["p_final"] = pr["pressure_final"]
     if kind(case) == "rods" and engine == "lammps-body":  # one body per rod
-        from workflows.case import size_extremes
+        from rodcase.case import size_extremes
 
         for key in ("mu", "k_t"):
             v.pop(key)
@@ -670,7 +670,7 @@ def failure_message(engine: str, returncode: int, text: str, screen: Path) -> st
 def resume_stamp(engine: str, case: dict, data) -> dict:
     """What identifies a run for resuming (``resume.json``): engine, case hash and the
     initial data's hash."""
-    from workflows.case import case_hash
+    from rodcase.case import case_hash
 
     return {"engine": engine, "case_hash": case_hash(case),
             "data": hashlib.sha256(Path(data).read_bytes()).hexdigest()}
@@ -920,7 +920,8 @@ def write_glued_data(init_path, out_path, case: dict) -> float:
     unit-thick periodic box, atom type 1 for the smallest diameter and 2 for larger ones,
     masses set by the deck; the total true rod *area* is returned.
     """
-    from pysim.io import atomic_write_text, read_particle_data
+    from pysim.io import read_particle_data
+    from rodcase.files import atomic_write_text
 
     d = read_particle_data(init_path)
     spacing = case["particles"].get("glued_spacing", 0.25)
@@ -1326,7 +1327,8 @@ def write_body_data(init_path, out_path, case: dict) -> float:
     mass ``rho V`` with the case's density and the solid spherocylinder's moments
     (:func:`pysim.state.inertia_3d`), one atom type.
     """
-    from pysim.io import atomic_write_text, read_particle_data
+    from pysim.io import read_particle_data
+    from rodcase.files import atomic_write_text
     from pysim.state import area, inertia_2d, inertia_3d, volume
 
     two_d = case["particles"].get("dimension", 3) == 2

@@ -73,9 +73,9 @@ class Law:
 
 
 def law_from_case(case: dict) -> Law:
-    """The law of a validated tapping case (:func:`workflows.case.validate_case` derives
+    """The law of a validated tapping case (:func:`rodcase.case.validate_case` derives
     ``k_n``, ``gamma_n`` from ``restitution`` and ``contact_time`` with
-    :func:`workflows.case.restitution_law`, and ``k_t``, ``gamma_t`` from them)."""
+    :func:`rodcase.case.restitution_law`, and ``k_t``, ``gamma_t`` from them)."""
     p, c = case["particles"], case["contact"]
     if c["law"] != "hooke":
         raise ValueError(f"the restitution check needs the linear law (contact.law hooke), "
@@ -126,7 +126,7 @@ def expected_restitution(law: Law, contacts: int = 1) -> float:
 
 def _steps(law: Law, v_rel: float) -> int:
     """Steps for the approach over the 0.2 D gap plus :data:`CONTACT_TIMES` contact times."""
-    from workflows.case import contact_time
+    from rodcase.case import contact_time
 
     t = 0.2 * law.diameter / v_rel + CONTACT_TIMES * contact_time(law.k_n, law.gamma_n,
                                                                   0.5 * law.mass)

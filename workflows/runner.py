@@ -29,8 +29,9 @@ import sys
 import time
 from pathlib import Path
 
-from workflows import checks, engines, provenance
-from workflows.case import load_case
+from rodcase import record
+from workflows import checks, engines
+from rodcase.case import load_case
 from workflows.stopping import Interrupted, check_signalled, stop_process, stop_signals_raise
 
 COMMON = ("particles.dump", "contacts.dump", "thermo.dat")
@@ -70,7 +71,7 @@ def _pysim(case_path: Path, data: Path, out: Path, threads: int, timeout: float)
 def _run_pysim(cmd: list, out: Path, stamp: dict, same: bool, threads: int,
                timeout: float) -> None:
     """Start (or resume) pysim, which writes its record to ``out/run.json``."""
-    from pysim.io import atomic_write_text
+    from rodcase.files import atomic_write_text
 
     stamp_path = out / "resume.json"
     if (out / "checkpoint.npz").exists() and same:
@@ -131,7 +132,7 @@ def _run(engine: str, case_path: Path, data: Path, out: Path, ranks: int, thread
         problem = checks.check_run(out, case)
         if problem:
             raise RunFailure(f"{engine} blew up: {problem}")
-        rec = provenance.record(engine, version, case, **{**summary, "status": "ok"})
+        rec = record.make(engine, version, case, **{**summary, "status": "ok"})
     except Exception as exc:  # noqa: BLE001 - every failure becomes a reported result
         if not isinstance(exc, (engines.EngineError, RunFailure)):
             import traceback
@@ -144,9 +145,9 @@ def _run(engine: str, case_path: Path, data: Path, out: Path, ranks: int, thread
         for name in COMMON:
             if (out / name).exists():
                 os.replace(out / name, failed / name)
-        rec = provenance.record(engine, version, case, status="failed", error=str(exc),
+        rec = record.make(engine, version, case, status="failed", error=str(exc),
                                 wall_seconds=time.perf_counter() - t0)
-    provenance.write(out / "run.json", rec)
+    record.write(out / "run.json", rec)
     (out / FINISHED).unlink(missing_ok=True)
     return rec
 

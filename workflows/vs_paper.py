@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from analysis.vs_paper import POINT, match, read_references, verdict_counts
-from workflows.case import read_yaml
+from rodcase.case import read_yaml
 
 #: the notebook of each study family
 STUDY_DOCS = {"tapping": "tapping.md", "deposition": "deposition.md",

@@ -113,7 +113,7 @@ def test_analyse_run_passes_the_rattler_rule_and_warns_on_stderr(tmp_path, monke
 
     import yaml
 
-    from workflows.case import validate_case
+    from rodcase.case import validate_case
     from workflows.scripts import analyse_run
 
     case = validate_case({

@@ -13,7 +13,7 @@ from pysim.initial import write_initial
 from pysim.simulation import ContactModel, Simulation
 from pysim.state import State
 from pysim.walls import cylinder, plane
-from workflows.case import validate_case
+from rodcase.case import validate_case
 
 
 def rods_in_a_tapped_cylinder():

@@ -19,7 +19,7 @@ from pysim.initial import write_initial
 from pysim.io import read_particle_data
 from pysim.protocols.deposit import cohesion, grain_mass
 from tests.pysim.test_protocols import run_case
-from workflows.case import ConfigError, validate_case
+from rodcase.case import ConfigError, validate_case
 
 DEP = {
     "particles": {"n": 60, "aspect_ratio": 2.0, "diameter": {"distribution": "mono", "mean": 1.0},

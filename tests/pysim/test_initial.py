@@ -10,7 +10,7 @@ from pysim.io import read_particle_data
 from pysim.neighbors import spatial_order
 from tests.pysim.test_deposit import DEP
 from tests.pysim.test_protocols import growth_case
-from workflows.case import validate_case
+from rodcase.case import validate_case
 
 
 @pytest.mark.parametrize("name, dim", [("spheres", 3), ("rods", 3), ("column", 3),

@@ -9,7 +9,7 @@ import yaml
 
 from analysis.io import RunData
 from pysim.initial import write_initial
-from workflows.case import validate_case
+from rodcase.case import validate_case
 
 
 def run_case(tmp_path, case, *extra):

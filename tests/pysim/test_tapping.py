@@ -11,7 +11,7 @@ from pysim.protocols.tapping import plan, settle_drag
 from pysim.simulation import ContactModel
 from tests.pysim.test_physics import collide, two_spheres
 from tests.pysim.test_protocols import run_case
-from workflows.case import restitution_law, validate_case
+from rodcase.case import restitution_law, validate_case
 
 D = 0.523e-3
 TAP = {
@@ -139,7 +139,7 @@ FREE = {"mode": "free", "ke_stop": 1e-8, "check_time": 0.005, "max_time": 1.0}
 
 
 def free_case(**prep):
-    from workflows.case import deep_merge
+    from rodcase.case import deep_merge
 
     return validate_case(deep_merge(TAP, {"protocol": {"preparation": {**FREE, **prep}}}))
 
@@ -250,7 +250,7 @@ def test_kept_tangential_spring_reaches_the_tapping_kernels(tmp_path):
     """contact.tangential_spring: keep changes a tapping run (grains and walls), reset is
     the default's run bit for bit; friction 0 runs too, with no tangential force."""
     from pysim.protocols.tapping import simulation_from_case
-    from workflows.case import deep_merge
+    from rodcase.case import deep_merge
 
     from pysim import io
     from pysim.initial import write_initial

@@ -12,7 +12,7 @@ import yaml
 from analysis.io import RunData
 from pysim.initial import write_initial
 from workflows import engines
-from workflows.case import validate_case
+from rodcase.case import validate_case
 
 CASE = {
     "particles": {"n": 64, "dimension": 2, "aspect_ratio": 0.5,

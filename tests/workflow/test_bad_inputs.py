@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 import yaml
 
-from workflows.case import ConfigError, validate_case, validate_config
+from rodcase.case import ConfigError, validate_case
+from workflows.studies import validate_config
 
 GOOD = {
     "particles": {"n": 500, "diameter": {"distribution": "mono", "mean": 1.0}},
@@ -313,7 +314,7 @@ def test_cli_non_finite_numbers_and_repeated_keys(tmp_path, old, new, message):
 
 def test_repeated_keys_of_a_merge_may_be_overridden(tmp_path):
     """YAML merge keys (``<<``, as the shipped profiles use them) are overridden on purpose."""
-    from workflows.case import read_yaml
+    from rodcase.case import read_yaml
 
     p = tmp_path / "c.yaml"
     p.write_text("a: &base {x: 1, y: 2}\nb: {<<: *base, y: 3}\n")

@@ -8,7 +8,7 @@ import yaml
 from analysis.io import RunData
 from pysim.initial import write_initial
 from workflows import engines, runner
-from workflows.case import validate_case
+from rodcase.case import validate_case
 
 CASE = {"particles": {"n": 40, "aspect_ratio": 1.0,
                       "diameter": {"distribution": "mono", "mean": 1.0}},

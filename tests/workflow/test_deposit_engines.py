@@ -14,7 +14,7 @@ from analysis.summary import analyse_deposit
 from pysim.initial import write_initial
 from tests.pysim.test_deposit import with_
 from workflows import engines
-from workflows.case import validate_case
+from rodcase.case import validate_case
 
 SMALL = with_(particles__n=40)
 

@@ -12,7 +12,7 @@ from analysis.stress import pressure
 from pysim.initial import write_initial
 from tests.conftest import needs_liggghts
 from workflows import engines
-from workflows.case import validate_case
+from rodcase.case import validate_case
 
 TINY = {
     "particles": {"n": 150, "diameter": {"distribution": "mono", "mean": 1.0}},
@@ -158,7 +158,7 @@ def test_lammps_resumes_from_its_restart_files(tiny, tmp_path):
     _, d = tiny
     case = validate_case({**TINY, "protocol": {**TINY["protocol"], "rate": 0.01}})
     out = tmp_path / "run"
-    code = (f"from workflows import engines; from workflows.case import validate_case; "
+    code = (f"from workflows import engines; from rodcase.case import validate_case; "
             f"import yaml; engines.run('lammps', validate_case(yaml.safe_load(open('{tmp_path}/c.yaml'))), "
             f"'{d}/init.data', '{out}', timeout=600)")
     import yaml

@@ -4,7 +4,8 @@ import re
 import pytest
 import yaml
 
-from workflows.case import ConfigError, load_config, validate_config
+from rodcase.case import ConfigError
+from workflows.studies import load_config, validate_config
 
 BASE = {"results": "results", "studies": {"base": {
     "description": "the base", "engines": ["pysim"], "seeds": [1, 2],

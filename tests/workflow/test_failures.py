@@ -147,7 +147,7 @@ def test_checkpoint_of_another_case_is_not_resumed(tmp_path):
     from pysim.initial import write_initial
     from tests.pysim.test_checkpoint import TINY
     from workflows import engines, runner
-    from workflows.case import validate_case
+    from rodcase.case import validate_case
 
     case = validate_case(TINY)
     (tmp_path / "case.yaml").write_text(yaml.safe_dump(case))
@@ -231,7 +231,7 @@ def test_engine_killed_by_sigterm_is_stopped_not_failed(tmp_path, sig):
     resumed rather than reported as failed."""
     import psutil
 
-    from workflows.case import validate_case
+    from rodcase.case import validate_case
     from pysim.initial import write_initial
 
     case = validate_case({**_pysim_config(tmp_path)["studies"]["sphere_jamming"]["case"],
@@ -260,7 +260,7 @@ def test_run_finished_before_the_stop_is_recorded_not_rerun(tmp_path):
     run), pysim's own record is kept aside and the next run records it without running
     pysim again."""
     from workflows import engines, runner
-    from workflows.case import validate_case
+    from rodcase.case import validate_case
     from pysim.initial import write_initial
     from tests.pysim.test_checkpoint import TINY, pysim_run
 

@@ -14,7 +14,7 @@ from pysim.protocols.deposit import cohesion
 from tests.conftest import needs_liggghts
 from tests.pysim.test_deposit import with_
 from workflows import engines
-from workflows.case import validate_case
+from rodcase.case import validate_case
 from workflows.checks import check_run
 
 # 24 rods of d = 3 (5 spheres at spacing D/2) in a box of width 6; settled to 1e-10 of the

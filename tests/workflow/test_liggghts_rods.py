@@ -18,7 +18,7 @@ from analysis.frame import Frame
 from pysim.initial import write_initial
 from tests.conftest import needs_liggghts
 from workflows import engines
-from workflows.case import ConfigError, validate_case
+from rodcase.case import ConfigError, validate_case
 from workflows.checks import check_run
 
 # 60 rods of alpha 1 (3 spheres at spacing D/2) in a periodic box of side 5 D under strong

@@ -22,7 +22,7 @@ from pysim.protocols.tapping import plan
 from tests.conftest import needs_liggghts
 from tests.pysim.test_tapping import TAP, D
 from workflows import engines
-from workflows.case import validate_case
+from rodcase.case import validate_case
 
 
 def with_(**changes):

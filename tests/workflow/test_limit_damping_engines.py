@@ -17,7 +17,7 @@ from tests.workflow.test_deposit_engines import SMALL
 from tests.workflow.test_engines import TINY
 from tests.workflow.test_liggghts_rods import CASE as RODS
 from workflows import engines
-from workflows.case import deep_merge, validate_case
+from rodcase.case import deep_merge, validate_case
 
 
 def normal_forces(native, engine: str) -> np.ndarray:

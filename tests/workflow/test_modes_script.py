@@ -9,7 +9,7 @@ import yaml
 
 from pysim import io
 from tests.pysim.test_minimize import overlapping_rods
-from workflows.case import validate_case
+from rodcase.case import validate_case
 from workflows.scripts import modes
 
 

@@ -118,7 +118,7 @@ def test_sets_figure_shows_how_far_the_bed_flies_when_measured(monkeypatch, tmp_
 def test_set_labels_name_a_changed_tangential_law_and_the_clip():
     """Sets told apart by their tangential law or by ``limit_damping`` get a third line;
     a set with the tangential law the schema derives gets none."""
-    from workflows.case import deep_merge, validate_case
+    from rodcase.case import deep_merge, validate_case
     from workflows.scripts.plot_tapping import set_label
 
     plain = validate_case(TAP)

@@ -14,7 +14,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from workflows.case import load_case, read_yaml, validate_config
+from rodcase.case import load_case, read_yaml
+from workflows.studies import validate_config
 
 ROOT = Path(__file__).resolve().parents[2]
 README = ROOT / "README.md"

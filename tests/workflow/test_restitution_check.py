@@ -9,7 +9,7 @@ import pytest
 
 from tests.pysim.test_tapping import TAP
 from workflows import restitution_check as rc
-from workflows.case import deep_merge, restitution_law, validate_case
+from rodcase.case import deep_merge, restitution_law, validate_case
 from workflows.engines import EngineError, venv_bin
 
 

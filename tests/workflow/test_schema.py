@@ -8,7 +8,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from workflows.case import ConfigError, load_config, validate_case, validate_config
+from rodcase.case import ConfigError, validate_case
+from workflows.studies import load_config, validate_config
 
 GOOD_CASE = {
     "particles": {"n": 500, "diameter": {"distribution": "mono", "mean": 1.0}},
@@ -218,7 +219,7 @@ def test_tapping_container_needs_its_diameter():
 def test_engine_seeds_run_an_engine_on_fewer_seeds():
     """studies.<study>.engine_seeds: LAMMPS on seed 1 beside pysim on seeds 1-3; seeds
     outside the study's, or an engine the study does not run, are clear errors."""
-    from workflows.case import runs
+    from workflows.studies import runs
 
     config = validate_config(config_with(seeds=[1, 2, 3], engine_seeds={"lammps": [1]}))
     got = sorted((r.engine, r.seed) for r in runs(config))
@@ -235,7 +236,7 @@ def test_engine_seeds_run_an_engine_on_fewer_seeds():
 @pytest.mark.parametrize("path", sorted((Path(__file__).resolve().parents[2] / "workflows" /
                                          "config").glob("*.yaml")), ids=lambda p: p.name)
 def test_every_shipped_profile_validates(path):
-    from workflows.case import runs
+    from workflows.studies import runs
 
     config = load_config(path)
     assert runs(config), f"{path.name} expands to no run"
@@ -248,7 +249,7 @@ def test_paper_variants_validate_and_run_on_pysim_only():
     """contact.tangential_spring: keep and protocol.preparation.mode: free are pysim's:
     the LAMMPS and LIGGGHTS runs of such a case are skipped with a message naming the key;
     without them (the defaults) every engine still runs the case."""
-    from workflows.case import runs
+    from workflows.studies import runs
     from workflows.engines import supports
 
     plain = validate_case(tap_case(), "case.yaml")

@@ -14,7 +14,7 @@ from pysim.initial import write_initial
 from pysim.protocols.tapping import plan
 from tests.pysim.test_tapping import TAP, D
 from workflows import engines
-from workflows.case import validate_case
+from rodcase.case import validate_case
 
 
 def observables(case, run_dir):

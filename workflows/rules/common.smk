@@ -6,8 +6,8 @@ import json
 import os
 import sys
 
-from workflows.case import (ConfigError, read_yaml, runs as expand_runs, validate_config,
-                            varying_parameters)
+from rodcase.case import ConfigError, read_yaml
+from workflows.studies import runs as expand_runs, validate_config, varying_parameters
 
 PYTHON = sys.executable
 _CONFIG_SOURCE = ", ".join(map(str, workflow.configfiles)) or "config"

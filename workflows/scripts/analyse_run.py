@@ -14,8 +14,8 @@ from pathlib import Path
 from analysis.summary import (TIDY_COLUMNS, analyse_compression, analyse_deposit,
                               analyse_growth, analyse_jammed, analyse_settled, analyse_tapping,
                               problems, tidy)
-from pysim.io import atomic_write_text
-from workflows.case import ConfigError, load_case
+from rodcase.files import atomic_write_text
+from rodcase.case import ConfigError, load_case
 from workflows.engines import settles
 
 #: provenance columns copied from run.json into every result row
@@ -83,8 +83,7 @@ def main(argv=None) -> int:
     if case["protocol"]["name"] == "growth":
         rows, curves, _thermo = analyse_growth(a.run, **rule)
     elif case["protocol"]["name"] == "jammed":
-        rows, curves, _thermo = analyse_jammed(a.run, **rule,
-                                               energy_target=case["protocol"]["energy_target"])
+        rows, curves, _thermo = analyse_jammed(a.run, **rule)
     elif case["protocol"]["name"] == "tapping":
         rows, curves, _thermo = analyse_tapping(a.run, **tap_plan(case))
     elif settles(a.engine, case):  # LIGGGHTS rods: a settled bed, not a compression

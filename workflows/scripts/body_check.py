@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from analysis.plots import ENGINE_COLORS, _save  # noqa: E402
-from pysim.io import atomic_write_text  # noqa: E402
+from rodcase.files import atomic_write_text  # noqa: E402
 from workflows.body_check import check  # noqa: E402
 
 

@@ -9,8 +9,8 @@ import sys
 import yaml
 
 from pysim.initial import write_initial
-from pysim.io import atomic_write_text
-from workflows.case import ConfigError, validate_case
+from rodcase.files import atomic_write_text
+from rodcase.case import ConfigError, validate_case
 
 
 def main(argv=None) -> int:

@@ -10,7 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from pysim.io import atomic_write_text
+from rodcase.files import atomic_write_text
 from workflows.landing import landing_html, landing_text, tables
 
 

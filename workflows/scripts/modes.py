@@ -26,7 +26,7 @@ from analysis import modes as am
 from analysis.contacts import remove_rattlers_2d
 from analysis.frame import Contacts, Frame
 from analysis.io import RunData
-from workflows.case import load_case
+from rodcase.case import load_case
 
 #: |omega^2| below this fraction of the largest counts as a zero mode (rounding leaves
 #: the translations near 1e-16 of it; the softest stress-stabilised rod modes lie near 1e-9)

@@ -13,7 +13,7 @@ import pandas as pd
 from analysis.contacts import contact_angles
 from analysis.io import RunData
 from analysis.plots import contact_angle_distributions
-from workflows.case import load_case
+from rodcase.case import load_case
 from workflows.runner import ok_runs
 
 

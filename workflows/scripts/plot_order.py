@@ -12,8 +12,8 @@ import pandas as pd
 
 from analysis.order import finite_size_order
 from analysis.plots import order_scaling
-from pysim.io import atomic_write_text
-from workflows.case import load_case
+from rodcase.files import atomic_write_text
+from rodcase.case import load_case
 from workflows.runner import ok_runs
 
 #: frames below this packing fraction are left out of the table (the dilute start)

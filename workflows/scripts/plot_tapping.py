@@ -14,8 +14,8 @@ import pandas as pd
 
 from analysis import plots, theory
 from analysis.io import read_particle_frames
-from pysim.io import atomic_write_text
-from workflows.case import GT_PER_GN, KT_PER_KN, ConfigError, load_case
+from rodcase.files import atomic_write_text
+from rodcase.case import GT_PER_GN, KT_PER_KN, ConfigError, load_case
 from workflows.runner import ok_runs
 from workflows.scripts.vs_paper import REFERENCES
 from workflows.vs_paper import reference_rows

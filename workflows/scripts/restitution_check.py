@@ -15,7 +15,7 @@ import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 
 from analysis.plots import ENGINE_COLORS, _save  # noqa: E402
-from pysim.io import atomic_write_text  # noqa: E402
+from rodcase.files import atomic_write_text  # noqa: E402
 from workflows.restitution_check import LABELS, SPACINGS, check, law_from_case  # noqa: E402
 
 MARKERS = ("s", "^", "v", "D")

@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 
 from workflows import runner
-from workflows.case import ConfigError
+from rodcase.case import ConfigError
 from workflows.stopping import Interrupted
 
 

@@ -11,8 +11,9 @@ import pandas as pd
 
 from analysis.compare import compare
 from analysis.summary import TIDY_COLUMNS
-from pysim.io import atomic_write_text
-from workflows.case import read_yaml, varying_columns
+from rodcase.files import atomic_write_text
+from rodcase.case import read_yaml
+from workflows.studies import varying_columns
 from workflows.scripts.analyse_run import PROVENANCE
 
 FAILURE_COLUMNS = ["study", "case", "engine", "seed", "error", "log", "run_dir"]

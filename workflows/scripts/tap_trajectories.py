@@ -81,8 +81,9 @@ def summary_line(df: pd.DataFrame) -> str:
 
 
 def main(argv=None) -> int:
-    from pysim.io import atomic_write_text, read_particle_data
-    from workflows.case import ConfigError, load_case
+    from pysim.io import read_particle_data
+    from rodcase.files import atomic_write_text
+    from rodcase.case import ConfigError, load_case
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("case", type=Path,

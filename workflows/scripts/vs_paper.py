@@ -12,8 +12,8 @@ import sys
 from pathlib import Path
 
 from analysis.vs_paper import ReferenceError, verdict_counts
-from pysim.io import atomic_write_text
-from workflows.case import ConfigError
+from rodcase.files import atomic_write_text
+from rodcase.case import ConfigError
 from workflows.vs_paper import STUDY_DOCS, markdown_table, vs_paper, with_block
 
 REFERENCES = Path(__file__).resolve().parents[2] / "references"

@@ -1,10 +1,8 @@
-"""Case and pipeline configuration: loading, validation, expansion into runs.
-
-A *case* (``schemas/case.schema.yaml``) is one physical system and protocol; a
-*configuration* (``schemas/config.schema.yaml``) lists studies, each a base case with
-named variants, engines and seeds. Everything is validated before anything runs;
-a bad value raises :class:`ConfigError` whose message is one line naming the file,
-the key, the value and what is allowed.
+"""A case: one physical system and protocol, as one YAML file (``case.schema.yaml`` beside
+this module) that every engine reads. Loading fills in the schema's defaults, checks
+physical consistency and derives the contact parameters the engines share; a bad value
+raises :class:`ConfigError` whose message is one line naming the file, the key, the value
+and what is allowed.
 """
 from __future__ import annotations
 
@@ -14,15 +12,12 @@ import json
 import math
 import os
 import re
-import shutil
-from dataclasses import dataclass
 from pathlib import Path
 
 import jsonschema
 import yaml
 
-SCHEMA_DIR = Path(__file__).resolve().parent / "schemas"
-ENGINES = ("pysim", "lammps", "lammps-body", "liggghts")
+SCHEMA_DIR = Path(__file__).resolve().parent
 #: RSA saturates near 0.38 for spheres; insertion is refused above this
 PHI_INSERT_MAX = 0.35
 #: memory per particle (or glued sphere) of a run and its analysis, bytes
@@ -31,18 +26,6 @@ BYTES_PER_PARTICLE = 2048
 PHI_INSERT_MAX_2D = 0.5
 #: time step must stay below this fraction of the binary contact time
 DT_MAX_FRACTION = 0.1
-#: column names of case parameters in tidy tables (science.md symbols)
-PARAMETER_NAMES = {
-    "protocol.rate": "kappa",
-    "particles.diameter.sigma": "sigma",
-    "particles.aspect_ratio": "alpha",
-    "protocol.preparation.mode": "preparation",
-}
-
-
-#: case keys that set up one engine's stand-in protocol (LIGGGHTS' settling of rods in a
-#: compression study), not the physics every engine runs: never a varying parameter
-ENGINE_ONLY = ("protocol.settle.",)
 
 
 class ConfigError(ValueError):
@@ -118,8 +101,9 @@ def read_yaml(path):
         raise ConfigError(f"{path}{where}: not valid YAML: {problem}") from None
 
 
-def _load_schema(name: str) -> dict:
-    with open(SCHEMA_DIR / name) as fh:
+def load_schema(path) -> dict:
+    """A JSON schema written as YAML."""
+    with open(path) as fh:
         return yaml.safe_load(fh)
 
 
@@ -146,7 +130,7 @@ def _with_defaults(validator_class):
                                         type_checker=base_types.redefine("number", finite_number))
 
 
-_Validator = _with_defaults(jsonschema.Draft202012Validator)
+Validator = _with_defaults(jsonschema.Draft202012Validator)
 
 
 def _bounds(s: dict) -> str:
@@ -194,7 +178,7 @@ def _key(path) -> str:
     return ".".join(str(p) for p in path) or "(top level)"
 
 
-def _raise_first(errors, source: str, prefix=()):
+def raise_first(errors, source: str, prefix=()):
     errors = sorted(errors, key=lambda e: (len(e.path), list(map(str, e.path))))
     if not errors:
         return
@@ -213,15 +197,15 @@ def _raise_first(errors, source: str, prefix=()):
     raise ConfigError(f"{source}: {_key(path)} = {e.instance!r} is not allowed; use {_allowed(e)}")
 
 
-def _check_finite(obj, source: str, path=()):
+def check_finite(obj, source: str, path=()):
     """Refuse NaN and infinity anywhere (the schema's number type refuses them where it
     types a value; this catches the rest)."""
     if isinstance(obj, dict):
         for k, v in obj.items():
-            _check_finite(v, source, tuple(path) + (k,))
+            check_finite(v, source, tuple(path) + (k,))
     elif isinstance(obj, list):
         for k, v in enumerate(obj):
-            _check_finite(v, source, tuple(path) + (k,))
+            check_finite(v, source, tuple(path) + (k,))
     elif isinstance(obj, float) and not math.isfinite(obj):
         raise ConfigError(f"{source}: {_key(path)} = {obj} is not allowed; use a finite number")
 
@@ -251,13 +235,13 @@ def validate_case(case: dict, source: str = "case", prefix=()) -> dict:
     """Validate a case (schema, the protocol's own schema, then physical consistency);
     return it with defaults filled in."""
     case = coerce_numbers(copy.deepcopy(case))
-    schema = _load_schema("case.schema.yaml")
-    _raise_first(_Validator(schema).iter_errors(case), source, prefix)
+    schema = load_schema(SCHEMA_DIR / "case.schema.yaml")
+    raise_first(Validator(schema).iter_errors(case), source, prefix)
     name = case["protocol"]["name"]
     sub = dict(schema["$defs"][f"protocol_{name}"])
-    _raise_first(_Validator(sub).iter_errors(case["protocol"]), source,
+    raise_first(Validator(sub).iter_errors(case["protocol"]), source,
                  tuple(prefix) + ("protocol",))
-    _check_finite(case, source, prefix)
+    check_finite(case, source, prefix)
     _check_case(case, source, ".".join(map(str, prefix)) + "." if prefix else "")
     return case
 
@@ -590,216 +574,3 @@ def case_hash(case: dict) -> str:
     """Short stable hash of a case (canonical JSON), recorded with every result."""
     text = json.dumps(case, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:12]
-
-
-# -- configurations -----------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Run:
-    """One engine run: ``{results}/{study}/{variant}/seed{seed}/{engine}``."""
-
-    study: str
-    variant: str
-    seed: int
-    engine: str
-
-    @property
-    def case_dir(self) -> str:
-        return f"{self.study}/{self.variant}/seed{self.seed}"
-
-    @property
-    def run_dir(self) -> str:
-        return f"{self.case_dir}/{self.engine}"
-
-
-def engine_available(engine: str) -> bool:
-    """pysim and LAMMPS come with the Python environment; LIGGGHTS is a system binary."""
-    if engine == "liggghts":
-        return shutil.which("liggghts") is not None
-    return True
-
-
-#: where a study's ``extends`` looks for a profile named without a folder
-PROFILE_DIR = Path(__file__).resolve().parent / "config"
-#: study keys taken whole from the extending study when it gives them (not merged)
-REPLACED_ON_EXTEND = ("variants", "engine_seeds")
-
-
-def _profile_path(name: str, source: str, at: str) -> Path:
-    path = Path(name)
-    for candidate in ([path] if path.is_absolute() else [PROFILE_DIR / path, Path.cwd() / path]):
-        if candidate.is_file():
-            return candidate
-    raise ConfigError(f"{source}: {at}.extends: no profile {name!r} (a file of "
-                      f"{PROFILE_DIR.relative_to(PROFILE_DIR.parents[1])}/ or a path)")
-
-
-def resolve_extends(config: dict, source: str = "config") -> dict:
-    """A configuration with every study's ``extends: <profile>[#<study>]`` replaced by
-    that study of that profile, deep-merged with the extending study's own keys
-    (``variants`` and ``engine_seeds``, when given, replace the base's instead). A
-    profile named without a folder is looked up in ``workflows/config/``; ``#<study>``
-    may be left out when the profile has one study. Chains are followed; a cycle is an
-    error."""
-    studies = config.get("studies") if isinstance(config, dict) else None
-    if not isinstance(studies, dict):
-        return config
-    out = dict(config, studies={})
-    for name, study in studies.items():
-        out["studies"][name] = (_extended(study, source, f"studies.{name}", ())
-                                if isinstance(study, dict) and "extends" in study else study)
-    return out
-
-
-def _extended(study: dict, source: str, at: str, seen: tuple) -> dict:
-    ref = study["extends"]
-    if not isinstance(ref, str) or not ref.strip():
-        raise ConfigError(f"{source}: {at}.extends = {ref!r} is not allowed; use "
-                          "'<profile>.yaml#<study>'")
-    file, _, base_name = ref.partition("#")
-    path = _profile_path(file, source, at)
-    base_studies = (read_yaml(path) or {}).get("studies") or {}
-    if not base_name:
-        if len(base_studies) != 1:
-            raise ConfigError(f"{source}: {at}.extends = {ref!r}: {path.name} has studies "
-                              f"{sorted(base_studies)}; name one as '{file}#<study>'")
-        base_name = next(iter(base_studies))
-    if base_name not in base_studies:
-        raise ConfigError(f"{source}: {at}.extends = {ref!r}: {path.name} has no study "
-                          f"{base_name!r}; use one of {sorted(base_studies)}")
-    key = (str(path.resolve()), base_name)
-    if key in seen:
-        raise ConfigError(f"{source}: {at}.extends = {ref!r} comes back to itself (a cycle)")
-    base = base_studies[base_name]
-    if isinstance(base, dict) and "extends" in base:
-        base = _extended(base, str(path), f"studies.{base_name}", seen + (key,))
-    own = {k: v for k, v in study.items() if k != "extends"}
-    base = {k: v for k, v in base.items() if not (k in REPLACED_ON_EXTEND and k in own)}
-    return deep_merge(base, own)
-
-
-def validate_config(config: dict, source: str = "config") -> dict:
-    """Validate a pipeline configuration and every case it expands to.
-
-    Returns the configuration with defaults filled and, under ``_cases``, the merged
-    and validated case of every ``(study, variant, seed)``. Studies that ``extends`` a
-    study of another profile are resolved first (:func:`resolve_extends`).
-    """
-    if not isinstance(config, dict):
-        raise ConfigError(f"{source}: a configuration is a mapping of keys")
-    config = coerce_numbers(resolve_extends(copy.deepcopy(config), source))
-    _raise_first(_Validator(_load_schema("config.schema.yaml")).iter_errors(config), source)
-    _check_finite({k: v for k, v in config.items() if k != "studies"}, source)
-    cases = {}
-    for name, study in config["studies"].items():
-        variants = study.get("variants") or {"base": {}}
-        if "seed" in study["case"]:
-            raise ConfigError(f"{source}: studies.{name}.case.seed is set per run from "
-                              f"studies.{name}.seeds; remove it")
-        for engine, seeds in study.get("engine_seeds", {}).items():
-            if engine not in study["engines"]:
-                raise ConfigError(f"{source}: studies.{name}.engine_seeds.{engine}: {engine} is "
-                                  f"not among the study's engines {study['engines']}")
-            extra = sorted(set(seeds) - set(study["seeds"]))
-            if extra:
-                raise ConfigError(f"{source}: studies.{name}.engine_seeds.{engine} = {seeds} has "
-                                  f"seeds {extra} that are not in studies.{name}.seeds = "
-                                  f"{study['seeds']}; use a subset of them")
-        for vname, override in variants.items():
-            merged = deep_merge(study["case"], override)
-            for seed in study["seeds"]:
-                merged["seed"] = seed
-                prefix = ("studies", name, "variants", vname) if "variants" in study else \
-                    ("studies", name, "case")
-                cases[(name, vname, seed)] = validate_case(merged, source, prefix)
-    _check_engines(config, source)
-    config["_cases"] = cases
-    return config
-
-
-def _check_engines(config: dict, source: str):
-    """Requested engines must be runnable: LAMMPS comes with the environment (its absence
-    is a broken set-up); LIGGGHTS may be missing (its runs are skipped with a message)
-    unless ``engines.liggghts.required`` is true."""
-    requested = {e for s in config["studies"].values() for e in s["engines"]}
-    if requested & {"lammps", "lammps-body"}:
-        from workflows.engines import EngineError, venv_bin
-
-        try:
-            venv_bin("lmp")
-        except EngineError as exc:
-            raise ConfigError(f"{source}: LAMMPS is requested but {exc}") from None
-    lig = config.get("engines", {}).get("liggghts", {})
-    if "liggghts" in requested and lig.get("required") and not engine_available("liggghts"):
-        raise ConfigError(f"{source}: engines.liggghts.required is true but the 'liggghts' binary "
-                          "is not installed (as root: make liggghts, or apt-get install liggghts)")
-
-
-def load_config(path) -> dict:
-    return validate_config(read_yaml(path), str(path))
-
-
-def runs(config: dict, skipped: list | None = None) -> list[Run]:
-    """All runs of a validated configuration; engines that are not installed, or that
-    cannot run a variant (:func:`workflows.engines.supports`), are left out and reported
-    in ``skipped`` (a list of one-line messages)."""
-    from workflows.engines import supports
-
-    out = []
-    for (study, variant, seed), case in config["_cases"].items():
-        only = config["studies"][study].get("engine_seeds", {})
-        for engine in config["studies"][study]["engines"]:
-            if seed not in only.get(engine, [seed]):
-                continue  # this engine runs fewer seeds (studies.<study>.engine_seeds)
-            reason = supports(engine, case)
-            if reason:
-                msg = f"skipping {engine} for study '{study}' variant '{variant}': {reason}"
-                if skipped is not None and msg not in skipped:
-                    skipped.append(msg)
-                continue
-            if not engine_available(engine):
-                if skipped is not None:
-                    msg = (f"{engine} is not installed: skipping its runs of study '{study}' "
-                           "(install it with 'make liggghts' as root, or "
-                           "'apt-get install liggghts')")
-                    if msg not in skipped:
-                        skipped.append(msg)
-                continue
-            out.append(Run(study, variant, seed, engine))
-    return out
-
-
-def varying_parameters(config: dict, study: str) -> dict[str, dict[str, object]]:
-    """Case parameters that differ between the variants of a study.
-
-    Returns ``{column name: {variant: value}}``; columns use the science symbols of
-    :data:`PARAMETER_NAMES` where one exists, else the last key. Keys under
-    :data:`ENGINE_ONLY` are left out.
-    """
-    return varying_columns({v: case for (s, v, _), case in config["_cases"].items()
-                            if s == study})
-
-
-def varying_columns(cases: dict[str, dict]) -> dict[str, dict[str, object]]:
-    """:func:`varying_parameters` of the cases ``{variant: case}`` (e.g. read back from the
-    ``case.yaml`` files of finished runs); ``seed`` never varies a column."""
-    flat = {v: _flatten({k: val for k, val in case.items() if k != "seed"})
-            for v, case in cases.items()}
-    keys = set().union(*[set(f) for f in flat.values()]) if flat else set()
-    keys = {k for k in keys if not k.startswith(ENGINE_ONLY)}
-    out = {}
-    for key in sorted(keys):
-        values = {v: f.get(key) for v, f in flat.items()}
-        if len({json.dumps(x, sort_keys=True) for x in values.values()}) > 1:
-            out[PARAMETER_NAMES.get(key, key.split(".")[-1])] = values
-    return out
-
-
-def _flatten(d: dict, prefix: str = "") -> dict:
-    out = {}
-    for k, v in d.items():
-        key = f"{prefix}{k}"
-        if isinstance(v, dict):
-            out.update(_flatten(v, key + "."))
-        else:
-            out[key] = v
-    return out

@@ -1,4 +1,5 @@
-"""Provenance records written next to every result (``run.json``)."""
+"""The run record (``run.json``) every engine's run leaves beside its output: engine and
+version, case hash and seed, git revision, host, outcome (``docs/formats.md``)."""
 from __future__ import annotations
 
 import json
@@ -8,8 +9,8 @@ import subprocess
 import time
 from pathlib import Path
 
-from pysim.io import atomic_write_text
-from workflows.case import case_hash
+from rodcase.case import case_hash
+from rodcase.files import atomic_write_text
 
 PROJECT_ROOT = Path(__file__).resolve().parents[1]
 
@@ -27,8 +28,8 @@ def git_revision() -> str:
         return "unknown"
 
 
-def record(engine: str, version: str, case: dict, **extra) -> dict:
-    """A provenance record: engine and version, case hash and seed, git revision, host."""
+def make(engine: str, version: str, case: dict, **extra) -> dict:
+    """A run record: engine and version, case hash and seed, git revision, host."""
     return {
         "engine": engine,
         "engine_version": version,
@@ -44,4 +45,5 @@ def record(engine: str, version: str, case: dict, **extra) -> dict:
 
 
 def write(path, rec: dict):
+    """Write a record as sorted, indented JSON, atomically."""
     atomic_write_text(path, json.dumps(rec, indent=2, sort_keys=True, default=str) + "\n")
