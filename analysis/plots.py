@@ -161,14 +161,17 @@ def message_figure(out, message: str):
     _save(fig, out)
 
 
-def trends(summary, parameter, observables, out, title=None, references=None, series=None):
+def trends(summary, parameter, observables, out, title=None, references=None, series=None,
+           papers=()):
     """Observables versus a case parameter (e.g. ``alpha``), one panel each, engines
     overlaid: mean and standard deviation over seeds (a series ``'<engine> <protocol>'``,
     runs of another protocol, in the engine's colour with open squares). ``references``
     maps an observable to ``[(label, x (array), y (array))]`` curves drawn in black
     (theory). ``series``: a second parameter column (e.g. ``bond_number``) that splits
     each engine's points into one line per value, coloured by value, with one marker and
-    line style per engine."""
+    line style per engine. ``papers``: published values, dicts ``observable, label, x, y,
+    yerr``, drawn as red diamonds with their uncertainty where ``x`` lies within the
+    data's range, one legend entry per label."""
     have = summary[np.isfinite(summary.value.astype(float))]
     obs = [o for o in observables if o in set(have.observable)]
     if not obs or parameter not in summary.columns:
@@ -210,6 +213,12 @@ def trends(summary, parameter, observables, out, title=None, references=None, se
                 ax.plot(np.asarray(x)[keep], np.asarray(y)[keep], color="k",
                         ls=["--", ":", "-."][k % 3], marker="x" if len(keep) < 30 else None,
                         ms=4, lw=0.8, label=label)
+        shown = [p for p in papers if p["observable"] == o and lo <= p["x"] <= hi]
+        for k, label in enumerate(dict.fromkeys(p["label"] for p in shown)):
+            pts = [p for p in shown if p["label"] == label]
+            ax.errorbar([p["x"] for p in pts], [p["y"] for p in pts],
+                        yerr=[p["yerr"] for p in pts], fmt="Dd^v"[k % 4], color="tab:red",
+                        mfc="none", ms=6, capsize=2, lw=0, elinewidth=1, label=label)
         ax.set_xlabel(parameter)
         positive = s[parameter][s[parameter] > 0]
         if lo > 0 and hi / lo > 50:  # e.g. compression rates over decades

@@ -8,6 +8,7 @@ from pathlib import Path
 import pandas as pd
 
 from analysis.vs_paper import verdict_counts
+from workflows.vs_paper import cell
 
 COLORS = {"agree": "#d9f2d9", "agrees": "#d9f2d9", "DIFFER": "#f8d0d0", "differs": "#f8d0d0",
           "inconclusive": "#fde9c4", "unresolved": "#fde9c4", "conditions differ": "#e4e4f7",
@@ -44,19 +45,13 @@ def _verdict_key(v: str) -> str:
     return "conditions differ" if str(v).startswith("conditions differ") else str(v)
 
 
-def _cell(x) -> str:
-    if isinstance(x, float):
-        return "" if pd.isna(x) else f"{x:.4g}"
-    return html.escape(str(x))
-
-
 def _html_table(df: pd.DataFrame, columns: list[str], verdict: str) -> str:
     head = "".join(f"<th>{html.escape(c)}</th>" for c in columns)
     body = []
     for _, r in df.iterrows():
         color = COLORS.get(_verdict_key(r[verdict]), "#ffffff")
         body.append(f'<tr style="background:{color}">'
-                    + "".join(f"<td>{_cell(r[c])}</td>" for c in columns) + "</tr>")
+                    + "".join(f"<td>{html.escape(cell(r[c]))}</td>" for c in columns) + "</tr>")
     return (f'<table border="1" style="border-collapse:collapse;font-size:small">'
             f"<tr>{head}</tr>{''.join(body)}</table>")
 
@@ -118,6 +113,6 @@ def landing_text(results) -> str:
         lines.append("against the papers: " + ", ".join(
             f"{n} {v}" for v, n in sorted(verdict_counts(vsp).items())))
         for _, r in vsp[vsp["verdict"] != "not run"].iterrows():
-            lines.append(f"  {r.id} {r.observable} ({r.engine}): paper {_cell(r.paper_value)}, "
-                         f"ours {_cell(r.ours)} -> {r.verdict}")
+            lines.append(f"  {r.id} {r.observable} ({r.engine}): paper {cell(r.paper_value)}, "
+                         f"ours {cell(r.ours)} -> {r.verdict}")
     return "\n".join(lines)

@@ -111,3 +111,26 @@ def test_deposits_against_the_bond_number_alone(tmp_path, monkeypatch):
                      if ln.get_label().startswith(("isotropic", "major axes"))]
             for ylabel, ax in axes.items()}
     assert refs["angle_mean"] == [45.0] and refs["major_order"] == [0.0]
+
+
+def test_the_papers_values_ride_along_the_trend(tmp_path):
+    """A 2-D jamming study over alpha gets Marschall & Teitel's phi_J and z_J at their
+    aspect ratios (every alpha of the table, not only ours), each with its uncertainty."""
+    import yaml
+
+    from workflows.studies import load_config
+
+    cfg = load_config("workflows/config/jamming_2d_paper.yaml")
+    (study, variant, seed), case = next(iter(cfg["_cases"].items()))
+    d = tmp_path / study / variant / f"seed{seed}"
+    d.mkdir(parents=True)
+    (d / "case.yaml").write_text(yaml.safe_dump(case))
+    pts = plot_trends.paper_points(tmp_path, study, "alpha", ["phi_j", "z_j_bonds"])
+    phi = {p["x"]: p["y"] for p in pts if p["observable"] == "phi_j"}
+    assert phi[0.0] == pytest.approx(0.8412) and phi[1.0] == pytest.approx(0.8875)
+    assert phi[4.0] == pytest.approx(0.866)
+    z = {p["x"]: p for p in pts if p["observable"] == "z_j_bonds"}
+    assert z[0.01]["y"] == pytest.approx(4.43) and z[0.01]["yerr"] == pytest.approx(0.03)
+    assert all(p["label"].startswith("marschall2018") for p in pts)
+    assert plot_trends.paper_points(tmp_path, study, "kappa", ["phi_j"]) == []
+    assert plot_trends.paper_points(tmp_path, "no_such_study", "alpha", ["phi_j"]) == []

@@ -17,8 +17,7 @@ from analysis.io import read_particle_frames
 from rodcase.files import atomic_write_text
 from rodcase.case import GT_PER_GN, KT_PER_KN, ConfigError, load_case
 from workflows.runner import ok_runs
-from workflows.scripts.vs_paper import REFERENCES
-from workflows.vs_paper import reference_rows
+from workflows.vs_paper import REFERENCES, reference_rows
 
 
 def curves_figure(run_dirs, out: Path) -> int:

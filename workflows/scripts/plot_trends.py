@@ -78,6 +78,35 @@ def references(parameter: str, dimension: int, alphas=(), values=()) -> dict:
                        theory.thin_rod_limit(10.0, a[thin]))], **deposit}
 
 
+def paper_points(results: Path, study: str, parameter: str, observables) -> list[dict]:
+    """The papers' values of ``observables`` along ``parameter`` (a point parameter of
+    ``references/``, e.g. ``alpha``) at the other parameters of the study's cases (read
+    from ``<results>/<study>/<case>/seed<k>/case.yaml``), for :func:`analysis.plots.trends`.
+    The papers' conditions may differ from ours (``vs_paper.csv`` says where)."""
+    from analysis.vs_paper import POINT
+    from rodcase.case import ConfigError, load_case
+    from workflows.vs_paper import REFERENCES, reference_rows
+
+    if parameter not in POINT:
+        return []
+    rows = {}
+    for case_file in sorted(Path(results, study).glob("*/seed*/case.yaml")):
+        try:
+            case = load_case(case_file)
+        except ConfigError:
+            continue  # a run of an older schema: its own table says so
+        # the aspect ratio alpha = L/D and the paper's d = 1 + alpha move together
+        free = ("alpha", "d") if parameter in ("alpha", "d") else (parameter,)
+        refs = reference_rows(case, REFERENCES, free=free)
+        refs = refs[refs.observable.isin(observables)
+                    & pd.to_numeric(refs[parameter], errors="coerce").notna()]
+        rows.update({r.id: r for r in refs.itertuples()})
+    return [{"observable": r.observable, "label": f"{r.paper} ({r.where.split(';')[0]})",
+             "x": float(getattr(r, parameter)), "y": float(r.value),
+             "yerr": float(r.uncertainty) if pd.notna(r.uncertainty) else 0.0}
+            for r in rows.values()]
+
+
 def label_protocols(df: pd.DataFrame) -> pd.DataFrame:
     """Runs of another protocol than the study's (LIGGGHTS' rods settled under gravity,
     with an observable ``settled``) get their own series, ``<engine> settled``, so that
@@ -111,10 +140,12 @@ def main(argv=None) -> int:
     # the caging number beside the jammed contact numbers of 3-D packings, not deposits
     alphas = (df["alpha"].dropna().unique() if a.parameter == "alpha" and "alpha" in df
               and a.protocol != "deposit" and (df.observable == "z_j").any() else ())
-    plots.trends(df, a.parameter, OBSERVABLES + DEPOSIT_OBSERVABLES, a.out, title=a.study,
+    shown = OBSERVABLES + DEPOSIT_OBSERVABLES
+    plots.trends(df, a.parameter, shown, a.out, title=a.study,
                  references=references(a.parameter, a.dimension, alphas,
                                        df[a.parameter].dropna() if a.parameter in df else ()),
-                 series=a.series)
+                 series=a.series,
+                 papers=paper_points(a.summary.parent, a.study, a.parameter, shown))
     return 0
 
 

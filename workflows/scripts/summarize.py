@@ -76,9 +76,9 @@ def main(argv=None) -> int:
     atomic_write_text(a.comparison, cmp.to_csv(index=False))
     fail = failures(a.records)
     atomic_write_text(a.failures, fail.to_csv(index=False))
-    for _, r in cmp.iterrows():
-        print(f"{r.study}/{r.case} {r.observable}: {r.engine_a} {r.mean_a:.4f} vs {r.engine_b} "
-              f"{r.mean_b:.4f} -> {r.verdict}", file=sys.stderr)
+    # the verdicts themselves are the landing page's to print (workflows/landing.py)
+    print(f"{a.summary}: {len(df)} rows; {a.comparison}: {len(cmp)} engine pairs; "
+          f"{a.failures}: {len(fail)} failed runs", file=sys.stderr)
     for _, r in fail.iterrows():
         print(f"FAILED {r.study}/{r.case}/seed{r.seed}/{r.engine}: {r.error}", file=sys.stderr)
     return 0

@@ -14,9 +14,8 @@ from pathlib import Path
 from analysis.vs_paper import ReferenceError, verdict_counts
 from rodcase.files import atomic_write_text
 from rodcase.case import ConfigError
-from workflows.vs_paper import STUDY_DOCS, markdown_table, vs_paper, with_block
+from workflows.vs_paper import REFERENCES, STUDY_DOCS, markdown_table, vs_paper, with_block
 
-REFERENCES = Path(__file__).resolve().parents[2] / "references"
 
 
 def main(argv=None) -> int:
