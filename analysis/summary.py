@@ -211,15 +211,15 @@ def analyse_growth(run_dir, c_min: int | None = None, friction: float = 0.0):
     packing at ``phi_j``, ``residual_j`` its largest force over the mean contact force
     when the relaxation stopped, and ``settled_j`` 1 when that relaxation ended at a
     minimum, 0 when it ran out of rounds with the energy still falling (a jammed decision
-    without proof; NaN for runs written before the column, 2026-11-24). Curves: every
-    output frame, with ``relaxed`` and ``jammed`` flags for the frames of the
-    relax/increment cycles.
+    without proof; NaN for older runs, whose files lack the column: docs/formats.md).
+    Curves: every output frame, with ``relaxed`` and ``jammed`` flags for the frames of
+    the relax/increment cycles.
     """
     run = RunData(run_dir)
     thermo = run.thermo
     cycles = pd.read_csv(Path(run_dir) / "cycles.dat", sep=r"\s+", comment="#", header=None,
                          names=["step", "phi", "e", "p", "nc", "jammed", "iterations",
-                                "residual", "settled"])  # the last three since 2026-11-24
+                                "residual", "settled"])  # older files lack the last three
     curves = frame_curves(run, c_min, friction)
     curves["relaxed"] = curves.step.isin(cycles.step)
     curves["jammed"] = curves.step.isin(cycles.step[cycles.jammed == 1])

@@ -66,12 +66,11 @@ REC_COLUMNS = 10
 #: (``fr[6 q + c]``): a store writes one or two cache lines, not six rows far apart. The
 #: general pass (:func:`pair_pass`) and :func:`rod_pass` index the records by the pair's
 #: slot, its place in the transposed list (:func:`_slot`), :func:`sphere_pass` by the
-#: pair itself: its stores then run in pair order, without a search (two parts, one
-#: thread, 10^4 spheres: 1.15 ms per pass against 1.25), but the records written spread
-#: over all pairs of the rows next to a part's ends, and for rods, with many pairs per
-#: row, that made 10^4 rods on two threads peak at 1048 bytes each instead of 942. The
-#: other rows (the rods' separations) lie beyond the records; memory pages that are never
-#: touched take no memory
+#: pair itself: its stores then run in pair order, without a search, but the records
+#: written spread over all pairs of the rows next to a part's ends, which for rods, with
+#: many pairs per row, makes more memory resident (docs/performance.md). The other rows
+#: (the rods' separations) lie beyond the records; memory pages that are never touched
+#: take no memory
 FJ_COLUMNS = 6
 #: the row of ``fj`` (when it has one) that holds the pair's spine distance at the last
 #: list build (:func:`pysim.neighbors.spine_separations`), for skipping pairs out of reach
@@ -502,14 +501,9 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
 #: loops are cast to ``np.uint64``: Numba wraps a signed index that LLVM cannot prove
 #: non-negative (``a[-1]``), three instructions per access, and it cannot prove it for a
 #: chunk's columns (the small index lists ``kk``, ``ka``... are still written with signed
-#: counters). Forces of the bench's 10^4 spheres, one thread,
-#: three alternations: 104-112 ns per sphere with signed indices, 93-101 unsigned.
-#: 96, not 128: the scratch (31 rows, 23 KB) then leaves room in the 48 KB first-level
-#: cache of this project's Intel machine. Steps of the bench's 10^4 spheres with
-#: friction, one process, alternating, min over 11 rounds, ns per sphere-step: one thread
-#: 140.5 with 128, 135.3 with 96, 135.9 with 80, 137.6 with 64; two threads 78.0, 76.5,
-#: 74.8, 77.5; without friction no change (89.2 with 96, 88.1 with 128). The rods' chunks
-#: (:data:`RCAP`) gained nothing from 96 and lost with 64
+#: counters). 96, not 128: the scratch (31 rows, 23 KB) then leaves room in a 48 KB
+#: first-level cache. The rods' chunks (:data:`RCAP`) gained nothing from 96 and lost with
+#: 64 (docs/performance.md)
 CAP = 96
 # rows of the scratch: inputs (gap d, |d|^2, radii, velocities and spins of i and j, spring),
 # then outputs (force on i, torque on i, torque on j, overlap); the spring is updated in place
@@ -519,11 +513,8 @@ _NS = 31
 #: the laws run on a multiple of this many columns (the columns past the pairs in reach
 #: hold an earlier chunk's values, computed and ignored): LLVM runs the loop on 8-wide
 #: vectors and the remainder one pair at a time, so a chunk's last pairs would each cost a
-#: whole scalar law. Measured on the bench state with friction: with 16 a step takes
-#: 0.94-0.95 of the time before this gather; with 8, 32 or no padding 0.97-0.98. With
-#: chunks of 96 (:data:`CAP`, session 39, Intel machine) 8 is better: spheres, one
-#: thread, medians of 11 alternations 132.4 and 130.5 ns per sphere-step against 134.2 and
-#: 133.0 with 16; two threads 74.1 against 75.2; the rods' steps 160.0 against 165.2
+#: whole scalar law. 8 measured best with :data:`CAP`'s chunks of 96 (16 with the earlier
+#: 128: docs/performance.md), so measure again when CAP changes
 PAD = 8
 
 
@@ -536,11 +527,9 @@ def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, 
     without branches on the pair (each is copied to the next free column, which only a
     pair in reach keeps; ``ko`` collects the others), the second copies velocities, spins
     and springs of the pairs in reach only. Returns the number of pairs in reach. The
-    minimum image is two selects per axis (the same values as the ``if``/``elif`` it
-    replaced): a step of the bench's 10^4 spheres with friction, one thread, took 145.4
-    and 150.2 ns per sphere with the branches and 144.3 and 145.5 with the selects
-    (medians of two runs). The first loop runs on unsigned pair numbers (132.7 ns per
-    sphere-step with signed ones, 130.4 unsigned, medians of 11 alternations)."""
+    minimum image is two selects per axis (the same values as an ``if``/``elif``, and
+    faster: docs/performance.md). The first loop runs on unsigned pair numbers (no
+    negative-index wraparound, see :data:`CAP`)."""
     hb0, hb1, hb2 = 0.5 * b0, 0.5 * b1, 0.5 * b2
     m = 0
     mo = 0
@@ -787,9 +776,7 @@ def _sphere_part(bl, bh, nt, x, v, omega, radius, b0, b1, b2, p0, p1, p2, pi, pj
                  fj, stats, blk, own):
     """The part of :func:`sphere_pass` on blocks ``bl:bh`` (of ``nt`` parts). With one part
     the scatter is called with ``solo`` a constant, so that it compiles without the
-    per-pair test of the shared particles: the pass took 1.32 ms with the flag a variable
-    (True at run time) and 1.06 ms with the constant (10^4 spheres with friction, one
-    thread)."""
+    per-pair test of the shared particles (a variable flag made the pass slower)."""
     n = x.shape[0]
     fr = fj.reshape(-1)  # the reaction records (FJ_COLUMNS)
     S = np.zeros(_NS * CAP)  # zeros: the padding columns never hold garbage
@@ -814,11 +801,11 @@ def _sphere_part(bl, bh, nt, x, v, omega, radius, b0, b1, b2, p0, p1, p2, pi, pj
             mc = _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1,
                                 p2, hist, dcoh, friction, S, kk, ko)
             _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt)
-            if nt == 1:  # a constant: the one-part scatter compiles apart (0.8x the time)
+            if nt == 1:  # a constant: the one-part scatter compiles apart, without the test
                 i, s0, s1, s2, q0, q1, q2, nl = _sphere_scatter(
                     k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, stats, blk,
                     b, S, kk, mc, True, own, kl, s0, s1, s2, q0, q1, q2)
-            else:  # stats a constant too (two threads: 0.93x the pass time)
+            else:  # stats a constant too: each variant compiles without the stats branch
                 if stats:
                     i, s0, s1, s2, q0, q1, q2, nl = _sphere_scatter(
                         k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torque, True,
@@ -859,10 +846,7 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, 
     reaction sum`` in pair order, so any number of parts gives the same bits; with
     spatially sorted particles few are shared, and the threads touch no more memory than
     one thread does. With more than one part the records of the shared particles' pairs
-    in ``fj`` must hold zero on entry (:func:`clear_slots`); they are left at zero. Two parts on one thread, 10^4
-    spheres with friction: 1.51 ms per pass with the part's end and a flag tested per
-    pair, the reactions stored six rows apart at a slot searched in the transposed list;
-    1.15 ms now (one part: 1.05 ms).
+    in ``fj`` must hold zero on entry (:func:`clear_slots`); they are left at zero.
 
     Each block of rows runs in chunks of at most ``CAP`` listed pairs, in three loops:
     :func:`_sphere_gather` copies the pairs in reach into a scratch, one column each,
@@ -899,9 +883,7 @@ def sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk, 
 #: listed pairs per chunk of :func:`rod_pass` (two scratches of :data:`_NA` and :data:`_NR`
 #: rows of ``RCAP`` values: 58 KiB, within L2). 128 rather than 64: the copy of the pairs in
 #: reach has twice the independent loads in flight, which counts once the particles no
-#: longer fit in the last-level cache. Forces of a step of the bench's rods, ns per rod,
-#: three alternations, 1 and 2 threads: 10^6 rods 194-222 and 105-108 (with 64: 215-222 and
-#: 116-122), 10^4 rods 116-127 and 61-68 (128-134 and 65-71); 256 was slower than 128
+#: longer fit in the last-level cache; 256 was slower (docs/performance.md)
 RCAP = 128
 # scratch A, one column per listed pair that the motion bound does not rule out: gap of the
 # centres, both axes, half-lengths and radii; then the closest points (a = p_i - x_i, the
@@ -931,8 +913,8 @@ def _rod_gather(k0, k1, pi, pj, x, u, radius, half, b0, b1, b2, p0, p1, p2, use_
     with the same result (no force, a zero spring). With ``per``, the pairs it keeps are
     tested again with the shares of their own two rods, ``sigma g_ref - dl_i - dl_j``
     (:func:`pysim.neighbors.motion_bound`), before their rods are gathered: the largest
-    share belongs to the few rods that moved most, and the bench's rods, 200 steps after
-    a build, keep 2.4 listed pairs per rod instead of 4.3."""
+    share belongs to the few rods that moved most, so the rods' own shares rule out many
+    more pairs."""
     m = 0
     mo = 0
     lim = reach_max * (1.0 + 1e-9)
@@ -1017,11 +999,8 @@ def _rod_select(A, ma, ka, kb, mo, pi, pj, v, omega, hist, dcoh, friction, R, kr
     the others to ``kb``. Returns the number in reach and the new length of ``kb``.
 
     Also prefetches ``f_j`` and ``torque_j``, which :func:`_rod_scatter` updates after the
-    laws: at 10^6 rods they lie in the last-level cache or beyond. The forces of a step of
-    the bench's 10^6 rods, six alternating runs each, median (range) in ns per rod: one
-    thread 199 (194-204) without, 190 (186-204) with; two threads 107 (105-114) and 103
-    (100-125); 10^4 rods 117-139 and 117-135 on one thread, no change beyond the
-    scatter."""
+    laws: at 10^6 rods they lie in the last-level cache or beyond, and the prefetch pays
+    there (at 10^4 rods it changes nothing: docs/performance.md)."""
     mr = 0
     for m in range(ma):
         k = ka[m]
@@ -1149,7 +1128,7 @@ def _rod_scatter(k1, i, hi, pj, istart, hist, friction, f, torque, stats, blk, b
     row and partial sums after the chunk, and the number of reactions left out (their
     columns in ``kl``). Kept apart from :func:`_sphere_scatter`, not
     one function with the scratch layout as arguments: with runtime row offsets the
-    sphere steps took 2-3 % longer (measured)."""
+    sphere steps ran slower."""
     nl = 0
     for q in range(mo):
         uk = np.uint64(kb[q])
@@ -1222,8 +1201,7 @@ def _rod_part(bl, bh, nt, x, v, omega, u, radius, half, b0, b1, b2, p0, p1, p2, 
               jstart, jk, hist, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt, f, torque, fj,
               stats, blk, own, use_sep, sep_sigma, sep_shrink, reach_max, per, dl):
     """The part of :func:`rod_pass` on blocks ``bl:bh`` (of ``nt`` parts); the one-part
-    scatter compiles apart as in :func:`_sphere_part` (a step of 2000 rods, one thread:
-    0.416 ms before, 0.397 after)."""
+    scatter compiles apart as in :func:`_sphere_part`."""
     n = x.shape[0]
     fr = fj.reshape(-1)  # the reaction records (FJ_COLUMNS)
     A = np.zeros(_NA * RCAP)
@@ -1322,8 +1300,7 @@ def rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart
 @njit
 def _zero_rows(f, torque, lo, hi):
     """Zero the forces and torques of rows ``lo:hi``. As slices, which compile to plain
-    runs of stores: row by row (signed rows, three columns each) it took 4.3 ns per row
-    at 10^4 rows and 4.1 at 10^6, as slices 2.0 and 2.4 (min of 9, alternating)."""
+    runs of stores, faster than a loop row by row."""
     f[lo:hi] = 0.0
     torque[lo:hi] = 0.0
 
@@ -1363,10 +1340,8 @@ def own_flags(bounds, istart, jstart, jk, own):
     """:func:`_own_part` for every part (the ``own`` flags of all n particles), before any
     part runs: a part reads the flags of particles in later parts (their reactions are
     stored). They depend on the list and the parts alone, so
-    :func:`pysim.integrators.forces` keeps them from step to step: 10^4 spheres in two
-    parts take about 20 µs for them on one thread; whole two-thread steps, min of 30
-    rounds of 200, two alternations: 57.6 and 61.3 ns per sphere kept, 60.0 and 62.4
-    found at every step."""
+    :func:`pysim.integrators.forces` keeps them from step to step rather than finding
+    them at every step."""
     n = own.shape[0]
     for t in prange(bounds.shape[0] - 1):
         _own_part(bounds[t] * BLOCK, min(n, bounds[t + 1] * BLOCK), istart, jstart, jk, own)
@@ -1394,8 +1369,8 @@ def _is_shared(i, kb, jstart, jk):
     """Particle ``i`` is the second member of a pair before pair ``kb``. The transposed
     list holds each particle's pairs in pair order, so its first one decides; pairs are
     ordered by row, so with ``kb = istart[lo]`` this is a pair whose row lies before
-    ``lo`` (reading the row, ``pi``, took 5x the time). Without a branch on the particle
-    (a loop over particles ran 2x faster)."""
+    ``lo`` (faster than reading the row, ``pi``). Without a branch on the particle, which
+    made a loop over particles slower."""
     last = jk.shape[0] - 1
     if last < 0:  # no pairs
         return False
@@ -1432,8 +1407,8 @@ def _reaction_sum(i, jstart, jk, fr, by_pair, zero):
     order: its records in ``fr`` are those of its pairs with ``by_pair``, else of its
     slots (:func:`_slot`), both read through the transposed list. With ``zero`` each
     record is zeroed as it is read. Inlined, so that the flags are constants at each
-    caller: called, or with the zeroing in a loop of its own, the closing pass took 1.4x
-    and 1.6x the time."""
+    caller: called, or with the zeroing in a loop of its own, the closing pass was
+    slower."""
     g0 = 0.0
     g1 = 0.0
     g2 = 0.0

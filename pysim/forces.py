@@ -120,9 +120,7 @@ def tangential_force(kt, gt, mu, fn, x0, x1, x2, n0, n1, n2, vt0, vt1, vt2, dt, 
     Written with selects, not branches, so that a loop over contacts that calls it can
     run on SIMD lanes (:func:`pysim.contacts.sphere_pass`); the values not selected may
     be inf or NaN and are discarded. The reset multiplies by ``1/k_t`` (a loop-invariant
-    division, hoisted) rather than dividing three times per contact: the bench's 10^4
-    spheres, one thread, 149.5 and 151.6 ns per sphere-step before, 145.0 and 150.2 after
-    (medians of two runs).
+    division, hoisted) rather than dividing three times per contact.
     """
     # rotate into the tangent plane, preserving the length
     xn = x0 * n0 + x1 * n1 + x2 * n2

@@ -393,8 +393,8 @@ def random_spheres(diameters: np.ndarray, phi: float, seed: int, max_attempts: i
 #: (:func:`pysim.neighbors.spatial_order`); smaller ones keep the insertion order, so
 #: the studies' starts (at most 6000 particles) and their results stay as they were.
 #: pysim's contact pass reads each pair's second particle, which sorting keeps close in
-#: memory. One thread, ns per particle-step in random order (as RSA inserts them) and
-#: sorted: 10^5 spheres 279 and 148; 10^4 spheres 140 and 129; 10^4 rods 239 and 236.
+#: memory: a large gain once the particles leave the cache, little below
+#: (docs/performance.md)
 SORT_MIN = 20_000
 
 

@@ -269,9 +269,8 @@ def reciprocals(m, ip, ia):
 def inverses(mass, inertia, inv):
     """``inv[i] = (1/m_i, 1/I_perp,i, 1/I_axis,i)``, the reciprocals the kicks multiply
     by, so that the per-particle loops divide only when the particles grow (kept in
-    step there). Dividing, the two kicks of a step took 12 scalar divisions per
-    particle: the bench's 10^4 spheres with friction, one thread, 145.5 ns per
-    sphere-step with them, 138.8 with the reciprocals (medians of 9 alternations).
+    step there): dividing, the two kicks of a step took 12 scalar divisions per
+    particle.
     Taken from ``mass`` and ``inertia`` at the start of every call of the integrators,
     never kept between calls, so that a change to either is never missed."""
     for i in prange(mass.shape[0]):
@@ -481,9 +480,9 @@ def _half_and_half(x, v, q, u, omega, f, torque, mass, inertia, inv, radius, hal
                    periodic, h, dt, dim2, scale, deform, sc, sc3, sc5, parts, lanes):
     """:func:`_second_half` of one step and :func:`_first_half` of the next in one pass
     over the particles: the same operations in the same order per particle (the same
-    bits), one sweep of the arrays instead of two (10^4 spheres, one thread: 0.16 ms
-    against 0.22). Its drift repeats :func:`_first_half`'s on purpose: a flag in one
-    kernel choosing whether the second half runs first cost the whole gain (0.22 ms).
+    bits), one sweep of the arrays instead of two. Its drift repeats :func:`_first_half`'s
+    on purpose: a flag in one kernel choosing whether the second half runs first cost the
+    whole gain (docs/performance.md).
     The rows are cut into ``parts`` contiguous runs of :data:`ROT_BLOCK` rows, one per
     thread (:func:`_half_and_half_part`; ``lanes``: the rods turn on SIMD lanes)."""
     n = x.shape[0]
@@ -502,11 +501,10 @@ def _half_and_half_part(lo, hi, x, v, q, u, omega, f, torque, mass, inertia, inv
     :data:`ROT_BLOCK` rows: each block's kicks, drifts and wraps run first, one particle
     after the other, its rods are copied as they pass into a scratch, one column each,
     and turn there together (:func:`_rotate_lanes`, the bits of :func:`free_step`). Else
-    (spheres) in one loop, a rod calling :func:`free_step` where it passes. Per rod-step
-    on the bench's 10^4 rods, one thread: 64 ns rod by rod, 28 with the lanes; the
-    spheres' loop 10.4-10.5 ns per sphere-step (10.2-10.3 before the blocks). The body is
-    written out, not a function called per particle with the arrays: each such call took
-    50-190 ns more (reference counts of its array arguments)."""
+    (spheres) in one loop, a rod calling :func:`free_step` where it passes (the lanes
+    turn rods faster, and the blocks barely slow the spheres: docs/performance.md). The
+    body is written out, not a function called per particle with the arrays: each such
+    call costs the reference counts of its array arguments."""
     s0, s1, s2 = scale[0], scale[1], scale[2]
     b0, b1, b2 = box[0], box[1], box[2]
     p0, p1, p2 = periodic[0], periodic[1], periodic[2]
@@ -515,7 +513,7 @@ def _half_and_half_part(lo, hi, x, v, q, u, omega, f, torque, mass, inertia, inv
     rows = np.empty(B if lanes else 0, np.int64)
     for blo in range(lo, hi, B if lanes else max(1, hi - lo)):
         m = 0
-        # unsigned: no negative-index wraparound (12.5 ns per sphere-step with signed rows)
+        # unsigned: no negative-index wraparound
         for i in range(np.uint64(blo), np.uint64(min(hi, blo + B) if lanes else hi)):
             u0, u1, u2 = u[i, 0], u[i, 1], u[i, 2]
             f0, f1, f2 = f[i, 0], f[i, 1], f[i, 2]
@@ -617,8 +615,8 @@ def _turn_rows(T, m, rows, q, u, omega, inertia, inv, dt, dim2):
 
 
 #: pairs from which :func:`verlet_chunk` returns to its caller after a list rebuild, to
-#: free the old list: a return costs a Python call of the kernel (about 30 µs), a step
-#: with a list of this size 0.1 ms or more, and lists rebuild every tens of steps
+#: free the old list: a return costs a Python call of the kernel, small against a step
+#: with a list of this size, and lists rebuild only every tens of steps
 RETURN_PAIRS = 1 << 13
 
 

@@ -91,10 +91,10 @@ def _layer_started_elsewhere() -> str | None:
 if (_early_layer := _layer_started_elsewhere()) is not None:
     warnings.warn(
         f"Numba's threads were started on the {_early_layer!r} layer before pysim was "
-        "imported, so pysim could not choose OpenMP; on 2 threads a step of 10^4 rods took "
-        "1.6 times as long on 'tbb' and about 2 times on 'workqueue' (docs/performance.md, "
-        "session 42). Import pysim before calling numba.set_num_threads, or set "
-        "NUMBA_THREADING_LAYER to choose a layer on purpose.", RuntimeWarning, stacklevel=2)
+        "imported, so pysim could not choose OpenMP; threaded steps then take up to about "
+        "twice as long (docs/performance.md). Import pysim before calling "
+        "numba.set_num_threads, or set NUMBA_THREADING_LAYER to choose a layer on purpose.",
+        RuntimeWarning, stacklevel=2)
 
 njit = numba.njit(**JIT_FLAGS)
 """Decorator: ``@njit`` compiles a kernel with the project's JIT flags."""

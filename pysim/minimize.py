@@ -1,19 +1,17 @@
 """Energy minimisation by L-BFGS (scipy) at fixed box, for frictionless pair contacts.
 
 FIRE (:func:`pysim.integrators.fire_chunk`) is robust far from a minimum but crawls on
-the ill-conditioned energy landscape of a packing at jamming: on a 2-D packing of 1024
-rods (alpha 3) it left a residual force of 85 % of the mean contact force after 200 000
-iterations, which L-BFGS brought below 0.1 % in 3000. :func:`lbfgs` minimises the
-elastic energy ``U`` (the ``pe`` of :func:`pysim.integrators.forces`) over the positions
-and the spine directions.
+the ill-conditioned energy landscape of a packing at jamming, where L-BFGS brings the
+residual forces far lower in far fewer iterations (docs/performance.md). :func:`lbfgs`
+minimises the elastic energy ``U`` (the ``pe`` of :func:`pysim.integrators.forces`) over
+the positions and the spine directions.
 
 Coordinates: the centres ``x_i`` and, for rods (``L > 0``), a free vector ``w_i`` with
 ``u_i = w_i/|w_i|``, scaled by the half-length ``l_i = L_i/2`` so that both parts
 have units of length and a unit step of either moves the spine's ends by about the same
 distance. (Scaled by ``max(L_i/2, R_i)``, the stiffness of a rotation, ``~ k (L/2)^2``, fell
-below that of a translation by ``(L/2R)^2``: 1e-4 at alpha 0.01, where a jammed-looking
-2-D packing of 256 rods lost 1 % of its energy per 2000 iterations for 80 000 iterations;
-scaled by ``L/2`` it unjammed in 10 000.) All coordinates
+below that of a translation by ``(L/2R)^2``, 1e-4 at alpha 0.01, and packings of such
+rods crept instead of relaxing: docs/performance.md.) All coordinates
 are then divided by the length ``h`` of the first move, which L-BFGS makes one unit of
 its coordinates long, and the energy by a constant; the choices of
 :data:`FIRST_MOVES` are tried in turn while the line search gives up at once: near

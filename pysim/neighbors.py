@@ -282,10 +282,8 @@ def build_list(x, u, r_int, half, box, periodic, skin, row_room=ROW_ROOM, scratc
 
     The cells run in the order of :func:`spatial_order`, the longest box axis slowest
     (:func:`_longest_first`), so that in a sorted start a cell's neighbours lie close in
-    memory. With the cells in x, y, z order instead (before session 42), a build of the
-    bench's 10^5 rods (box 24.5 x 122 x 245: the particles' order reversed) took 4.11 µs
-    per rod, now 2.37; 10^6 rods (122 x 245 x 245) 2.43 and 2.26; 10^4 rods, whose arrays
-    fit in the cache, 2.32 and 2.54 (one thread, min of 3-300; the same pairs)."""
+    memory (in x, y, z order a build was slower where the particles were sorted the other
+    way: docs/performance.md)."""
     n = x.shape[0]
     rmax = 0.0
     rods = False
@@ -528,9 +526,8 @@ def spatial_order(x, box, cell: float = 1.0) -> np.ndarray:
     configuration it keeps neighbours close in memory, which the contact loop's speed for
     large N depends on (LAMMPS sorts its atoms likewise). A pair's second particle lies at
     most about a plane of cells (the two shorter axes) further on, so taking the longest
-    axis slowest keeps the particles between the two of a pair the fewest: 10^6 spheres in
-    a 20 x 201 x 201 box, two threads, 105 ns per particle-step with x slowest, 81-87 with
-    y (see ``docs/performance.md``)."""
+    axis slowest keeps the particles between the two of a pair the fewest (see
+    ``docs/performance.md``)."""
     x = np.asarray(x, dtype=np.float64)
     box = np.asarray(box, dtype=np.float64)
     nc = np.maximum((box // cell).astype(np.int64), 1)

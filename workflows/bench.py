@@ -299,17 +299,13 @@ def run(out: Path, n_spheres=10_000, n_rods=2000, steps=1000, rod_steps=500, rep
     small system repeats that segment, each time from the state as written, until it
     has run about ``scaling_work`` particle-steps (``segments``, in the row's ``steps``
     as ``scaling_steps * segments``), so that it is timed over as long as the large ones
-    (20 steps of 10^4 spheres take 20 ms, and single runs of them scattered by 30 %).
-    Not more steps of one run instead: the bench's rods at phi 0.5 unjam as they run
-    (1.2 contacts per rod up to step 40, 0.11 at step 2000) and a step costs less with
-    fewer contacts, so a small system timed over 2000 steps and the largest over 20
-    compared different states, not sizes (the rods' 10^6 point read 1.38 times the 10^4
-    one that way in session 41's run L, 1.19 over the same steps in run M;
-    ``docs/performance.md``, session 42). Every point is timed ``scaling_repeats``
-    times on each core count, in rounds over all points (:func:`scaling_spread` takes
-    the fastest: single timings of 10^5 rods gave 1.50 and 1.36 times the 10^4 time in
-    two runs of the same code, and the machine's speed drifts by 10-20 % over
-    minutes)."""
+    (a single short segment is too short to time reliably). Not more steps of one run
+    instead: the bench's rods at phi 0.5 unjam as they run and a step costs less with
+    fewer contacts, so a small system timed over many steps and the largest over few
+    compared different states, not sizes (``docs/performance.md``). Every point is timed
+    ``scaling_repeats`` times on each core count, in rounds over all points
+    (:func:`scaling_spread` takes the fastest: single timings scatter, and the machine's
+    speed drifts over minutes)."""
     out = Path(out).resolve()  # the peers run in the work folder: paths must be absolute
     work = out.parent / "bench"
     busy = busy_cores()

@@ -5,25 +5,24 @@
    units of ``k_n / D^(d-1)``), the packing is relaxed (FIRE, on a copy) every
    ``thermo_every`` steps; the compression stops at the first packing whose relaxed
    elastic energy per area ``U/L^d`` exceeds ``energy_target`` (jammed).
-2. **Bisect the box size**: between the last unjammed packing fraction and the first
-   jammed one, expand the box of the jammed packing affinely to the middle, relax, and
-   move the bracket. Where every expansion of the jammed packing unjams (an energy jump;
-   a 64-rod test closed its bracket at U/L^2 = 4e-6 so), the bracket is opened above the
-   unjammed packing, which is compressed until it jams (:func:`next_trial`), and the
-   bisection goes on from there. (Starting every trial from the trial before, as O'Hern
-   et al. 2003 do in small steps, mixes packings: a large compression of an unjammed one
-   lands in another basin.) The bisection ends when ``U/L^d`` lies within a
-   factor 2 of ``energy_target``, or the bracket is narrower than :data:`PHI_TOL` (opened
-   again when the jammed packing still holds more than :data:`REOPEN_ENERGY`: the ends lie
-   in different basins; see :func:`next_trial`), or ``max_bisections`` is reached. Each
-   relaxation (:func:`relax`) runs FIRE and L-BFGS (:func:`pysim.minimize.lbfgs`) in
-   rounds until the energy has stopped falling: a packing with small residual forces
-   may still be sliding towards an unjammed state, and taken as jammed it stalls the
-   bisection (at N = 1024 such a state at U/L^2 = 2e-9 unjammed on every expansion until
-   the bracket closed). A relaxed packing counts as jammed when its energy
-   density exceeds half the target *and* a contact backbone (particles with at least
-   ``d + 1`` contacts, others removed iteratively) holds at least half the particles: rods can
-   stay caught on the kink of the spine-distance law with tiny overlaps below jamming.
+2. **Bisect the box size**: between the last unjammed packing fraction and the first jammed
+   one, expand the box of the jammed packing affinely to the middle, relax, and move the
+   bracket. Where every expansion of the jammed packing unjams (an energy jump), the
+   bracket is opened above the unjammed packing, which is compressed until it jams
+   (:func:`next_trial`), and the bisection goes on from there. (Starting every trial from
+   the trial before, as O'Hern et al. 2003 do in small steps, mixes packings: a large
+   compression of an unjammed one lands in another basin.) The bisection ends when
+   ``U/L^d`` lies within a factor 2 of ``energy_target``, or the bracket is narrower than
+   :data:`PHI_TOL` (opened again when the jammed packing still holds more than
+   :data:`REOPEN_ENERGY`: the ends lie in different basins; see :func:`next_trial`), or
+   ``max_bisections`` is reached. Each relaxation (:func:`relax`) runs FIRE and L-BFGS
+   (:func:`pysim.minimize.lbfgs`) in rounds until the energy has stopped falling: a packing
+   with small residual forces may still be sliding towards an unjammed state, and taken as
+   jammed it stalls the bisection (every expansion of it unjams). A relaxed packing counts
+   as jammed when its energy density exceeds half the target *and* a contact backbone
+   (particles with at least ``d + 1`` contacts, others removed iteratively) holds at least
+   half the particles: rods can stay caught on the kink of the spine-distance law with tiny
+   overlaps below jamming.
 
 The final packing is the mechanically stable state: its frame is the last of
 ``particles.dump``/``contacts.dump`` (10 digits), ``stable_state.npz`` holds it at full
@@ -64,59 +63,51 @@ def energy_density(sim: Simulation, d_min: float) -> float:
 
 #: stop bisecting when the bracket on phi is this narrow: near jamming ``U/L^2`` is about
 #: ``0.2 (phi - phi_J)^2`` (2-D, N = 256, alpha 1), so the factor-2 window around the
-#: target 1e-15 is only some 5e-8 wide in phi; with a 1e-7 bracket a third of the quick
-#: profile's states closed at 2-3.5e-15, just outside it
+#: target 1e-15 is only some 5e-8 wide in phi (with a bracket of 1e-7 many states closed
+#: just outside the window: docs/performance.md)
 PHI_TOL = 1e-8
 #: a bracket that closes on a packing with more energy than this is opened again
 #: (:func:`next_trial`): with the harmonic law ``U/L^d`` is about ``(phi - phi_J)^2``, so
 #: such a packing is still 1e-6 or more above its own jamming point, and the two ends
 #: of the bracket lie in different basins: below, when the lower end came from the
-#: compression (quick profile, alpha 0.12 seed 1: closed at U/L^2 = 8.8e-6 on a lower
-#: bound from another packing, while the packing reached step by step stays jammed 1e-3
-#: below it); above, when it came from expanding the jammed packing, which unjams at the
-#: smallest expansion (64 rods, alpha 0.5, seed 2: closed at 4e-6, while the unjammed
-#: packing compressed from below jams with 1.4e-16 at 5e-9 under it)
+#: compression (a lower bound from another packing); above, when it came from expanding
+#: the jammed packing, which unjams at the smallest expansion (cases: docs/performance.md)
 REOPEN_ENERGY = 1e-12
 #: a packing is force-balanced when the minimisers reached ``force_tol`` or when every
 #: residual force and torque is below this fraction of the mean contact force and torque:
 #: at the target energy the absolute ``force_tol`` (1e-13 k_n / D) is some 4e-6 of the mean
-#: contact force, which FIRE does not always reach for rods, while a state left with 7 %
-#: residuals (the false jammed state that stalled the bisection) is far above this
+#: contact force, which FIRE does not always reach for rods, while the false jammed state
+#: that stalled the bisection kept residuals far above this
 BALANCE_TOL = 1e-3
 #: rounds (L-BFGS, then FIRE of up to ``max_relax`` iterations) at most per relaxation
 #: while the energy still falls (:func:`relax`): a packing with energy left may still be
-#: sliding out of a jammed-looking state. With FIRE runs of 20 000 iterations, 50 rounds
-#: give the budget that 5 rounds of 200 000 gave (5 left two of the quick profile's rod
-#: states with residuals of 0.2-1.4 of the mean contact force, taken as jammed)
+#: sliding out of a jammed-looking state. Many short rounds for the budget of a few long
+#: ones: with a few, rod states with large residuals passed as jammed (docs/performance.md)
 RELAX_ROUNDS = 50
 #: rounds at most for a trial of the jamming protocol (:func:`run`), whose decision
 #: (jammed or not) and final state rest on the relaxation having stopped. 50 were too few
-#: for rods of alpha 1.5 (N = 1024): a trial at phi 0.8902 ran out of its 50 rounds with
-#: U/L^2 = 1.03e-15, inside the target window, and was taken as the stable state (residuals
-#: 1.8 % of the mean contact force); 6 rounds more took it below a quarter of the target,
-#: unjammed
+#: for long rods: a trial ran out of them inside the target window, was taken as the
+#: stable state, and unjammed with a few rounds more (docs/performance.md)
 TRIAL_ROUNDS = 200
 #: a relaxation has reached a minimum when its energy fell by less than this fraction of
 #: itself in :data:`SETTLE_ROUNDS` rounds in a row (each ``max_relax`` / LBFGS_SHARE L-BFGS
 #: iterations and a FIRE run back to :data:`BALANCE_TOL`). Residuals below BALANCE_TOL alone
-#: are no minimum: of the 20 quick-profile stable states taken on that rule, 18 lost 0.4-100 %
-#: of their energy (three unjammed) when relaxed further, at 1-10 % per 2000 L-BFGS
-#: iterations, while settled states lose some 1e-9 per round (L-BFGS resolves no more)
+#: are no minimum: states taken on that rule went on losing energy, some until they
+#: unjammed, while settled states lose far less than this per round (L-BFGS resolves no
+#: more; docs/performance.md)
 ENERGY_RTOL = 1e-6
 #: consecutive rounds that must satisfy :data:`ENERGY_RTOL`: near a saddle the energy
-#: can stay put for a round or two (L-BFGS' line search gives up at once) and then fall
-#: (a 256-rod packing at U/L^2 = 2e-7 was taken as settled after two such rounds and
-#: unjammed on the next expansion)
+#: can stay put for a round or two (L-BFGS' line search gives up at once) and then fall,
+#: and a packing taken as settled after two such rounds unjammed on the next expansion
 SETTLE_ROUNDS = 3
 #: FIRE checks the early stops of a relaxation (energy below a quarter of the target, or
 #: every residual below :data:`BALANCE_TOL`) every this many iterations: checked only at
-#: the end of each ``max_relax`` round, a state balanced to 1e-3 early on went on to the
-#: absolute ``force_tol`` for up to 200 000 iterations (15 s per relaxation at N = 256)
+#: the end of each ``max_relax`` round, a state balanced early on went on towards the
+#: absolute ``force_tol`` for the rest of the round
 CHECK_EVERY = 1000
 #: L-BFGS iterations per round are ``max_relax`` over this: FIRE stalls on the
-#: ill-conditioned landscape near jamming (alpha 3, N = 1024: residual force 5 % of the
-#: mean contact force after 200 000 iterations), where 3000 L-BFGS iterations (3 s on one
-#: core) bring it to 0.1-0.2 %
+#: ill-conditioned landscape near jamming, where far fewer L-BFGS iterations bring the
+#: residuals far lower (docs/performance.md)
 LBFGS_SHARE = 10
 
 

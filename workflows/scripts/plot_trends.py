@@ -20,8 +20,8 @@ OBSERVABLES = ["phi_j", "z_j", "z_j_bonds", "s_nematic_j", "sqrt_n_s2", "sqrt_n_
 DEPOSIT_OBSERVABLES = ["phi_deposit", "angle_mean", "k_ratio", "major_order", "h_s_vv"]
 
 
-#: random contacts per caging-number estimate on the trends figure (about 3 s per aspect
-#: ratio; standard error ~0.25 contact)
+#: random contacts per caging-number estimate on the trends figure (standard error ~0.25
+#: contact, at a cost of seconds per aspect ratio)
 CAGING_TRIALS = 200
 
 
