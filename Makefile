@@ -8,8 +8,10 @@ VENV    ?= .venv
 PY      := $(VENV)/bin/python
 CORES   ?= 2
 CONFIG  ?= workflows/config/quick.yaml
-RESULTS ?= results
-# RESULTS given (make run RESULTS=...) overrides the profile's 'results:' folder
+# each profile names its own folder ('results:'; quick.yaml: results), so that running a
+# second profile leaves the first's tables and report alone; RESULTS=... overrides it
+PROFILE_RESULTS := $(shell sed -n 's/^results: *//p' $(CONFIG) 2>/dev/null | head -1)
+RESULTS ?= $(or $(PROFILE_RESULTS),results)
 RESULTS_OPT := $(if $(filter command line environment,$(origin RESULTS)),--config results=$(RESULTS))
 STAMP   := $(VENV)/.stamp-setup
 
