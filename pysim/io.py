@@ -3,7 +3,7 @@
 Every engine leaves, per run directory:
 
 * ``particles.dump`` - LAMMPS text dump, ``ITEM: ATOMS id type x y z radius`` (rods
-  add ``ux uy uz length``), one block per output step;
+  add ``ux uy uz length`` and OVITO's :data:`OVITO_COLUMNS`), one block per output step;
 * ``contacts.dump``  - LAMMPS *local* dump with ``ITEM: ENTRIES`` :data:`CONTACT_COLUMNS`,
   one block per output step, the same steps as ``particles.dump``;
 * ``thermo.dat``     - whitespace table with a ``# step time phi ...`` header
@@ -24,6 +24,11 @@ from rodcase.files import atomic_write_text, finalize, part_path  # noqa: F401 (
 
 PARTICLE_COLUMNS = ("id", "type", "x", "y", "z", "radius")
 ROD_COLUMNS = ("ux", "uy", "uz", "length")
+#: what OVITO maps by name onto its Orientation and Aspherical Shape, so that it draws rods
+#: as spherocylinders: the quaternion turning z onto the spine, and LAMMPS' ellipsoid
+#: convention of shape columns, which OVITO halves on import: ``2R, 2R, 2L`` give its
+#: spherocylinder of radius ``R`` and cylinder length ``L``
+OVITO_COLUMNS = ("quatw", "quati", "quatj", "quatk", "shapex", "shapey", "shapez")
 CONTACT_COLUMNS = ("i", "j", "cx", "cy", "cz", "nx", "ny", "nz", "overlap", "fx", "fy", "fz")
 THERMO_COLUMNS = ("step", "time", "phi", "pressure", "ke", "pe", "n_contacts")
 FLOAT_FMT = "%.10g"
@@ -43,8 +48,10 @@ def write_particles_frame(fh, step, box, periodic, ids, types, x, radius, axis=N
     cols = list(PARTICLE_COLUMNS)
     data = [ids, types, x[:, 0], x[:, 1], x[:, 2], radius]
     if axis is not None:
-        cols += list(ROD_COLUMNS)
-        data += [axis[:, 0], axis[:, 1], axis[:, 2], length]
+        cols += list(ROD_COLUMNS) + list(OVITO_COLUMNS)
+        q = quaternion_from_z(axis)
+        data += [axis[:, 0], axis[:, 1], axis[:, 2], length, q[:, 0], q[:, 1], q[:, 2], q[:, 3],
+                 2 * np.asarray(radius), 2 * np.asarray(radius), 2 * np.asarray(length)]
     box_hi = np.asarray(box_lo) + np.asarray(box)
     fh.write(f"ITEM: TIMESTEP\n{step}\nITEM: NUMBER OF ATOMS\n{n}\n")
     fh.write(_bounds_line(box_lo, box_hi, periodic) + "\n")
@@ -53,6 +60,18 @@ def write_particles_frame(fh, step, box, periodic, ids, types, x, radius, axis=N
         table = np.column_stack([np.asarray(c, dtype=np.float64) for c in data])
         fmt = ["%d", "%d"] + [FLOAT_FMT] * (len(cols) - 2)
         np.savetxt(fh, table, fmt=fmt)
+
+
+def quaternion_from_z(axis) -> np.ndarray:
+    """Unit quaternions ``(w, x, y, z)`` (N, 4) of the rotations that turn the z axis onto
+    the unit vectors ``axis`` (N, 3) by the shortest arc: ``q = (1 + u_z, -u_y, u_x, 0)``
+    normalised (the half-angle form of ``(cos th/2, sin th/2 (z x u)/|z x u|)``); for
+    ``u = -z`` a half turn about x."""
+    u = np.asarray(axis, dtype=np.float64).reshape(-1, 3)
+    q = np.column_stack([1.0 + u[:, 2], -u[:, 1], u[:, 0], np.zeros(len(u))])
+    down = q[:, 0] < 1e-12
+    q[down] = (0.0, 1.0, 0.0, 0.0)
+    return q / np.linalg.norm(q, axis=1)[:, None]
 
 
 def write_contacts_frame(fh, step, box, periodic, ij_ids, rec, box_lo=(0.0, 0.0, 0.0)):
