@@ -1,6 +1,6 @@
 # rodpack: two commands do everything.
 #   make run    set up, then run the default pipeline (quick profile) and build the report
-#   make test   set up, then the whole test suite
+#   make test   set up, then the whole test suite (make check: the fast part)
 # Other targets: setup, liggghts, doctor, lint, clean, slurm-up, slurm-down.
 SHELL   := /bin/bash
 PYTHON  ?= python3
@@ -15,7 +15,7 @@ RESULTS ?= $(or $(PROFILE_RESULTS),results)
 RESULTS_OPT := $(if $(filter command line environment,$(origin RESULTS)),--config results=$(RESULTS))
 STAMP   := $(VENV)/.stamp-setup
 
-.PHONY: setup liggghts run stop test doctor lint clean bench slurm-up slurm-down
+.PHONY: setup liggghts run stop test check doctor lint clean bench slurm-up slurm-down
 
 setup: $(STAMP) liggghts
 
@@ -60,6 +60,10 @@ stop:
 TEST_WORKERS ?= 2
 test: setup
 	$(VENV)/bin/pytest -q -n $(TEST_WORKERS) --dist loadfile
+
+# the developer's loop: no slow tests, no LAMMPS or LIGGGHTS runs, no SLURM
+check: setup
+	$(VENV)/bin/pytest -q -n $(TEST_WORKERS) --dist loadfile -m "not slow and not engines and not slurm"
 
 doctor: setup
 	$(PY) -m workflows.doctor

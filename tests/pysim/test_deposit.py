@@ -238,6 +238,7 @@ def test_fed_deposit_settles_inside_the_box(fed_run):
     assert contacts.force[contacts.j < 0, 1].sum() == pytest.approx(weight, rel=0.01)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("bond_number", [0.0, 100.0])
 def test_grains_enter_clear_of_everything(bond_number):
     """Entry spots: on the entry line, inside the side walls, and never within R_i + R_k +

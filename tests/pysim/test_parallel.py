@@ -32,6 +32,7 @@ def threaded(x, u, r, half, v, w, box, p, friction, hist=None, skin=0.3):
     return f, tq, vir, pe, nc, (pi, pj, hist)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("friction", [False, True])
 def test_threaded_pass_equals_serial_loop_and_reference(rng, friction):
     box = np.full(3, 9.0)
@@ -135,6 +136,7 @@ def test_sphere_list_with_long_rows(rng):
     assert len(pi) > ROW_ROOM * n  # the room per particle was too small
 
 
+@pytest.mark.slow
 def test_list_is_stale_never_misses_a_rod_contact(rng):
     """Rods translating, rotating and compressed: whenever the list is said to be good,
     every pair in contact range is in it."""
@@ -254,6 +256,7 @@ def dense_rods_with_friction(alpha_max=3.0):
     return Simulation(st, model, dt=5e-5)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 Numba threads")
 @pytest.mark.parametrize("alpha_max", [3.0, 0.0])
 def test_one_and_two_threads_give_identical_bits(alpha_max):
@@ -656,6 +659,7 @@ def compressed_2d_rods(n=400, seed=4):
     return sim
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 Numba threads")
 def test_overdamped_and_fire_give_identical_bits_on_one_and_two_threads():
     """Heun's and FIRE's per-particle loops run on threads, and FIRE's sums are taken per

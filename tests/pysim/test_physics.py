@@ -33,6 +33,7 @@ def collide(sim, nmax):
     raise AssertionError("no separation")
 
 
+@pytest.mark.slow
 def test_linear_spring_dashpot_restitution_and_contact_time():
     """e_n = exp(-pi zeta / sqrt(1 - zeta^2)), t_c = pi / sqrt(k/m_eff - (gamma/2m_eff)^2)."""
     k, gamma = 1e5, 30.0
@@ -283,6 +284,7 @@ def test_compression_stage_plan_reaches_the_target():
     assert st.packing_fraction() == pytest.approx(0.5, abs=1e-3)
 
 
+@pytest.mark.slow
 def test_overdamped_pair_relaxes_exponentially():
     """Two overlapping harmonic disks: d(delta)/dt = -2 k_e delta / (k_d A d^2)."""
     x = np.array([[4.0, 5.0, 0.0], [4.8, 5.0, 0.0]])
@@ -314,6 +316,7 @@ def jammed_2d(alpha_max, n=60, seed=11, phi=0.88):
     return sim
 
 
+@pytest.mark.slow
 def test_fire_balances_a_jammed_disk_packing():
     sim = jammed_2d(0.0)
     pe0 = sim.thermo().pe

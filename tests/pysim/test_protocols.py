@@ -169,6 +169,7 @@ def test_jammed_disks_by_box_bisection(tmp_path):
     np.testing.assert_allclose(exact.state.x, f.x - f.box_lo, rtol=1e-9, atol=1e-8)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("alpha, seed", [(0.12, 1), (0.5, 2)])
 def test_jammed_rods_end_at_a_minimum(tmp_path, alpha, seed):
     """2-D rods (end bonds): the stable state is a minimum of the energy, not a packing

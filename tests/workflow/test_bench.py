@@ -2,11 +2,13 @@
 import csv
 
 import numpy as np
+import pytest
 
 from workflows import bench
 from workflows.glued import glued_spheres, write_glued_rods_data
 
 
+@pytest.mark.slow
 def test_tiny_bench_writes_every_case(tmp_path):
     out = tmp_path / "bench.csv"
     rows = bench.run(out, n_spheres=300, n_rods=200, steps=20, rod_steps=10, repeats=1,

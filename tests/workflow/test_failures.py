@@ -45,6 +45,7 @@ def snakemake(cfg_path, *extra, env=None, cores="2"):
             "--quiet", *extra]
 
 
+@pytest.mark.slow
 @pytest.mark.engines
 def test_broken_deck_is_reported_and_the_rest_runs(tmp_path):
     inputs = tmp_path / "inputs"
@@ -75,6 +76,7 @@ def test_broken_deck_is_reported_and_the_rest_runs(tmp_path):
         assert set(summary.engine) == {"liggghts"}
 
 
+@pytest.mark.slow
 @pytest.mark.engines
 def test_unstable_case_is_a_reported_blow_up(tmp_path):
     """Soft contacts squeezed fast: pysim stops with its blow-up message (step and
@@ -99,6 +101,7 @@ def test_unstable_case_is_a_reported_blow_up(tmp_path):
     assert set(summary.case) == {"ok"} and set(summary.engine) == {"pysim", "lammps"}
 
 
+@pytest.mark.slow
 @pytest.mark.engines
 def test_killed_pipeline_finishes_on_rerun_with_the_same_summary(tmp_path):
     ref = tmp_path / "ref"
@@ -186,6 +189,7 @@ def _pysim_config(results):
         "variants": {"base": {}}}}}
 
 
+@pytest.mark.slow
 def test_stopped_pipeline_records_nothing_and_resumes(tmp_path):
     """'make stop' (workflows.scripts.stop) stops a running pipeline, --keep-going and all:
     Snakemake starts no further run, the run under way writes no run.json (a stop is not

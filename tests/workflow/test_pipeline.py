@@ -32,6 +32,7 @@ def tiny_config(results):
     }
 
 
+@pytest.mark.slow
 @pytest.mark.engines
 def test_pipeline_end_to_end(tmp_path):
     results = tmp_path / "results"
