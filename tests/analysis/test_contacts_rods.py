@@ -390,3 +390,50 @@ def test_friction_must_be_a_number_at_least_zero():
         ContactNumber(friction=-0.1)
     with pytest.raises(ValueError, match="friction must be a number >= 0, got nan"):
         ContactNumber(friction=float("nan"))
+
+
+def test_end_bonds_count_a_side_contact_twice_when_both_ends_overlap():
+    """Marschall & Teitel's rule: two bonds where both end bonds of a side contact
+    overlap, whatever the tilt (here 1e-5 rad, far from parallel by the 1e-6 rad test
+    of parallel_side_contacts); one bond once the tilt lifts an end out of contact
+    (tilt L > overlap: here past 1e-4 rad, the deepest point of the pair overlapping by
+    1e-6); one for a tip against a tip and for disks."""
+    from analysis.contacts import end_bond_counts, parallel_side_contacts
+
+    length, overlap = 0.01, 1e-6
+    gap = 1.0 - overlap  # centre distance of two rods of radius 0.5
+
+    def pair(tilt, shift=None, lengths=(length, length)):
+        # rod j above rod i, its lower end overlapping i by `overlap`
+        shift = (0.0, gap + 0.5 * length * np.sin(tilt)) if shift is None else shift
+        x = np.array([[5.0, 5.0, 0.0], [5.0 + shift[0], 5.0 + shift[1], 0.0]])
+        u = np.array([[1.0, 0.0, 0.0], [np.cos(tilt), np.sin(tilt), 0.0]])
+        fr = frame_of(x, 0.5, [10.0, 10.0, 1.0], periodic=(True, True, False), axis=u,
+                      length=np.array(lengths), dimension=2)
+        return fr, geometric_contacts(fr)
+
+    for tilt, bonds in ((0.0, 2), (1e-5, 2), (5e-5, 2), (2e-4, 1), (0.3, 1)):
+        fr, c = pair(tilt)
+        assert len(c.i) == 1
+        assert end_bond_counts(fr, c).tolist() == [bonds], tilt
+    fr, c = pair(1e-5)
+    assert not parallel_side_contacts(fr, c).any()  # the angle test counts it once
+    fr, c = pair(0.0, shift=(length + gap, 0.0))  # collinear, tip against tip
+    assert end_bond_counts(fr, c).tolist() == [1]
+    fr, c = pair(0.0, lengths=(0.0, 0.0))  # disks
+    assert end_bond_counts(fr, c).tolist() == [1]
+
+
+def test_flat_side_fraction_counts_rods_touched_on_a_flat_side():
+    """Rod 1 is touched on its flat side by a disk, rod 2 only on its cap by the same
+    disk: one of the two rods has a flat-side contact."""
+    from analysis.contacts import flat_side_contact_fraction
+
+    x = np.array([[5.0, 5.0, 0.0], [5.0, 5.0 + 0.999, 0.0], [5.0 + 0.5 + 0.999, 5.999, 0.0]])
+    u = np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    fr = frame_of(x, 0.5, [10.0, 10.0, 1.0], periodic=(True, True, False), axis=u,
+                  length=np.array([1.0, 0.0, 1.0]), dimension=2)
+    c = geometric_contacts(fr)
+    assert len(c.i) == 2
+    assert flat_side_contact_fraction(fr, c) == pytest.approx(0.5)
+    assert flat_side_contact_fraction(fr, c, among=np.array([True, True, False])) == 1.0
