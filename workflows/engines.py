@@ -99,8 +99,6 @@ def supports(engine: str, case: dict) -> str | None:
         return f"{engine} integrates inertial dynamics only (no overdamped integrator)"
     if k == "rods" and engine == "liggghts":  # settles under gravity instead (protocol.settle)
         return liggghts_settle_support(case)
-    if k == "rods" and case["contact"].get("friction", 0.0) > 0:
-        return f"the {engine} rods deck is frictionless"
     return None
 
 
@@ -571,10 +569,10 @@ def _deck_vars(case: dict, engine: str) -> dict[str, str]:
         for key in ("mu", "k_t"):
             v.pop(key)
         v["d_max"] = size_extremes(case["particles"]["diameter"])[2]
-    elif kind(case) == "rods":
+    elif kind(case) == "rods":  # friction between the glued spheres of different rods
         v.update(_rod_vars(case))
-        for key in ("mu", "k_t"):
-            v.pop(key)
+        gamma_n = c.get("gamma_n", 0.0)
+        v["x_gamma_t"] = c.get("gamma_t", 0.0) / gamma_n if gamma_n > 0 else 0.0
     elif engine == "lammps":
         v["x_gamma_t"] = 0.0
     else:
