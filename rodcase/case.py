@@ -7,6 +7,7 @@ and what is allowed.
 from __future__ import annotations
 
 import copy
+import functools
 import hashlib
 import json
 import math
@@ -101,8 +102,10 @@ def read_yaml(path):
         raise ConfigError(f"{path}{where}: not valid YAML: {problem}") from None
 
 
+@functools.lru_cache(maxsize=None)
 def load_schema(path) -> dict:
-    """A JSON schema written as YAML."""
+    """A JSON schema written as YAML, parsed once per process (every case of a profile is
+    validated against it; the validators only read it)."""
     with open(path) as fh:
         return yaml.safe_load(fh)
 

@@ -1,7 +1,8 @@
 """``make doctor``: what this installation has, and whether the engines can run.
 
 Prints the Python packages' versions, the LAMMPS version and the packages it was
-built with (GRANULAR, BODY and RIGID are needed), ``mpiexec``, and LIGGGHTS' version.
+built with (GRANULAR, BODY and RIGID are needed), ``mpiexec``, LIGGGHTS' version, and
+what each engine runs (:mod:`workflows.capabilities`).
 Exit status 1 when something required is missing.
 
 ``python -m workflows.doctor --install-preload`` writes the ``.pth`` file that makes
@@ -18,7 +19,7 @@ import sysconfig
 from pathlib import Path
 
 REQUIRED_LAMMPS_PACKAGES = ("GRANULAR", "BODY", "RIGID")
-PYTHON_PACKAGES = ("lammps", "mpich", "numpy", "numba", "scipy", "pandas", "MDAnalysis",
+PYTHON_PACKAGES = ("lammps", "mpich", "numpy", "numba", "scipy", "pandas", "MDAnalysis", "ovito",
                    "snakemake", "snakemake-executor-plugin-slurm", "matplotlib", "pytest",
                    "tqdm", "PyYAML", "jsonschema")
 PRELOAD_NAME = "rodpack_libmpi.pth"
@@ -91,6 +92,11 @@ def main(argv=None) -> int:
     print(f"mpiexec           {mpiexec if mpiexec.exists() else 'MISSING'}")
     lig = liggghts_version()
     print(f"LIGGGHTS          {lig or 'not installed: LIGGGHTS runs are skipped (as root: make liggghts)'}")
+    from workflows.capabilities import markdown, matrix
+
+    print("\nwhat each engine runs (workflows.engines.supports on the shipped cases; "
+          "some: depends on the law or the protocol's options, the pipeline says why):")
+    print(markdown(matrix()))
     return 0 if ok else 1
 
 
