@@ -23,11 +23,38 @@ class FormatError(ValueError):
     """A file does not follow the common format; the message names file and line."""
 
 
-def _blocks(path: Path, count_item: str):
-    """Yield ``(step, bounds (3, 2), periodic (3,), columns, table, first line)``."""
+def _last_block_text(path: Path, chunk: int = 1 << 20) -> str:
+    """The text of a dump from its last ``ITEM: TIMESTEP`` line on, read backwards from
+    the end in chunks (a long run's dump need not be read whole for its final frame)."""
+    marker = b"ITEM: TIMESTEP"
+    try:
+        fh = open(path, "rb")
+    except FileNotFoundError:
+        raise FormatError(f"{path}: no such file") from None
+    with fh:
+        pos = fh.seek(0, 2)
+        buf = b""
+        while pos > 0:
+            size = min(chunk, pos)
+            pos -= size
+            fh.seek(pos)
+            buf = fh.read(size) + buf
+            k = buf.rfind(marker)
+            while k > 0 and buf[k - 1:k] != b"\n":  # the marker must open a line
+                k = buf.rfind(marker, 0, k)
+            if k == 0 and pos > 0:
+                continue  # the line may start in the previous chunk
+            if k >= 0:
+                return buf[k:].decode()
+    raise FormatError(f"{path}: no 'ITEM: TIMESTEP' line: not a dump")
+
+
+def _blocks(path: Path, count_item: str, lines: list[str] | None = None):
+    """Yield ``(step, bounds (3, 2), periodic (3,), columns, table, first line)``; from
+    ``lines`` when given (line numbers then count from their first)."""
     path = Path(path)
     try:
-        lines = path.read_text().splitlines()
+        lines = path.read_text().splitlines() if lines is None else lines
     except FileNotFoundError:
         raise FormatError(f"{path}: no such file") from None
     k = 0
@@ -86,10 +113,13 @@ def _blocks(path: Path, count_item: str):
         k += 9 + n
 
 
-def read_particle_frames(path) -> list[Frame]:
-    """All frames of a particle dump (``id type x y z radius [ux uy uz length]``)."""
+def read_particle_frames(path, last_only: bool = False) -> list[Frame]:
+    """All frames of a particle dump (``id type x y z radius [ux uy uz length]``), or
+    with ``last_only`` its final frame alone (read from the end of the file)."""
     frames = []
-    for step, bounds, periodic, cols, table, first in _blocks(path, "ITEM: NUMBER OF ATOMS"):
+    lines = _last_block_text(Path(path)).splitlines() if last_only else None
+    for step, bounds, periodic, cols, table, first in _blocks(path, "ITEM: NUMBER OF ATOMS",
+                                                               lines):
         col = {c: k for k, c in enumerate(cols)}
         for need in ("id", "x", "y", "z", "radius"):
             if need not in col:

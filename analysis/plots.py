@@ -427,6 +427,75 @@ def _nice_step(span: float, ticks: int = 4) -> float:
     return float(mag * min((m for m in (1.0, 2.0, 5.0, 10.0) if m * mag >= raw)))
 
 
+def _stadiums(a, b, radius, points: int = 12) -> np.ndarray:
+    """Outlines (N, 2 points + 2, 2) of 2-D stadiums: the points within ``radius`` of the
+    segments ``a``-``b`` (N, 2), a disk where ``a = b``; the outline of a spherocylinder
+    seen along any direction."""
+    d = b - a
+    n = np.linalg.norm(d, axis=1)
+    ang = np.where(n > 0, np.arctan2(d[:, 1], d[:, 0]), 0.0)
+    half = np.linspace(-np.pi / 2, np.pi / 2, points)
+    cap_b = ang[:, None] + half[None, :]  # around b, facing along the segment
+    cap_a = cap_b + np.pi  # around a, facing back
+    r = np.asarray(radius)[:, None]
+    ring_b = b[:, None, :] + r[..., None] * np.stack([np.cos(cap_b), np.sin(cap_b)], -1)
+    ring_a = a[:, None, :] + r[..., None] * np.stack([np.cos(cap_a), np.sin(cap_a)], -1)
+    return np.concatenate([ring_b, ring_a], axis=1)
+
+
+def packing_snapshots(frames, out):
+    """One panel per ``(title, Frame)``: a 2-D packing whole, a 3-D one as the slab of
+    thickness ``max(L + D)`` through the middle of the box seen along y (the x-z plane),
+    every grain drawn at its size as the outline it casts (a stadium; a disk for a
+    sphere). Rods coloured by the angle of the spine to the horizontal (3-D: to the x-y
+    plane; 2-D: to the x axis), spheres and disks by radius."""
+    from matplotlib.collections import PolyCollection
+
+    fig, axes = plt.subplots(1, len(frames), figsize=(4.2 * len(frames) + 0.6, 4.4),
+                             squeeze=False)
+    pc = None
+    for ax, (title, f) in zip(axes[0], frames):
+        two_d = f.dim == 2
+        h, v = (0, 1) if two_d else (0, 2)
+        sel = np.ones(f.n, bool)
+        if not two_d:
+            mid = f.box_lo[1] + 0.5 * f.box[1]
+            sel = np.abs(f.x[:, 1] - mid) < 0.5 * float(np.max(f.length + 2 * f.radius))
+        x, u, half, r = f.x[sel], f.axis[sel], 0.5 * f.length[sel], f.radius[sel]
+        a = np.column_stack([x[:, h] - half * u[:, h], x[:, v] - half * u[:, v]])
+        b = np.column_stack([x[:, h] + half * u[:, h], x[:, v] + half * u[:, v]])
+        rods = bool(np.any(f.length > 0))
+        if rods:
+            tilt = np.abs(u[:, 1]) if two_d else np.abs(u[:, 2])
+            colour, clim, label = np.degrees(np.arcsin(np.clip(tilt, 0, 1))), (0, 90), \
+                "spine angle to the horizontal (deg)" if not two_d else \
+                "spine angle to the x axis (deg)"
+        else:
+            colour, clim, label = r, (float(f.radius.min()), float(f.radius.max()) or 1.0), \
+                "radius"
+        order = np.argsort(x[:, 1]) if not two_d else np.arange(len(x))  # far grains first
+        pc = PolyCollection(_stadiums(a, b, r)[order], cmap="viridis", edgecolors="k",
+                            linewidths=0.2)
+        pc.set_array(colour[order])
+        pc.set_clim(*clim if clim[1] > clim[0] else (clim[0], clim[0] + 1))
+        ax.add_collection(pc)
+        lo, hi = f.box_lo, f.box_lo + f.box
+        ax.add_patch(plt.Rectangle((lo[h], lo[v]), f.box[h], f.box[v], fill=False, lw=0.8))
+        pad = 0.05 * max(f.box[h], f.box[v])
+        ax.set_xlim(lo[h] - pad, hi[h] + pad)
+        ax.set_ylim(lo[v] - pad, hi[v] + pad)
+        ax.set_aspect("equal")
+        ax.set_xlabel("x")
+        ax.set_ylabel("y" if two_d else "z")
+        ax.set_title(f"{title}\n" + ("all grains" if two_d else
+                                      f"slab through the middle ({int(sel.sum())} of {f.n})"),
+                     fontsize=8)
+        ax.tick_params(labelsize=7)
+    if pc is not None:
+        fig.colorbar(pc, ax=axes.ravel().tolist(), shrink=0.8).set_label(label)
+    _save(fig, out)
+
+
 def tapping_snapshots(frames, out, container_diameter: float, cut: float | None = None):
     """Side views (all grains projected on x-z) and cuts through the cylinder axis (grains
     whose centre lies within ``cut`` of the x-z plane, default half a grain length) of the

@@ -125,7 +125,8 @@ def get_final_output():
             out.append(f"{RESULTS}/{study}/figures/pressure_variants.png")  # p(phi) overlaid
     for study, variant in study_variants():
         if study in deposit:
+            out.append(f"{RESULTS}/{study}/figures/{variant}.packing.png")
             continue
-        kinds = ["snapshots"] if study in tapping else ["pressure", "contacts", "phi_j"]
+        kinds = ["snapshots"] if study in tapping else ["pressure", "contacts", "phi_j", "packing"]
         out += expand(f"{RESULTS}/{study}/figures/{variant}.{{kind}}.png", kind=kinds)
     return out

@@ -337,6 +337,24 @@ rule plot_tapping_snapshots:
         " {params.dirs} --taps 0 -1 2> {log}"
 
 
+rule plot_packing:
+    input:
+        lambda wc: [f"{d}/run.json" for d in run_dirs(wc.study, wc.variant)],
+    output:
+        report(
+            f"{RESULTS}/{{study}}/figures/{{variant}}.packing.png",
+            caption="../report/packing.rst",
+            category="{study}",
+            subcategory="{variant}",
+        ),
+    log:
+        f"{RESULTS}/{{study}}/figures/{{variant}}.packing.log",
+    params:
+        dirs=lambda wc: " ".join(run_dirs(wc.study, wc.variant)),
+    shell:
+        "{PYTHON} -m workflows.scripts.plot_snapshots --out {output} {params.dirs} 2> {log}"
+
+
 rule landing:
     input:
         summary=f"{RESULTS}/summary.csv",
