@@ -156,7 +156,8 @@ def end_bond_counts(frame: Frame, contacts: Contacts, apart: float = 0.25) -> np
     """Bonds per particle-particle contact (C,) by Marschall & Teitel's (2018) rule for a
     side-to-side contact: its two end bonds (each end of one spine against the closest
     point of the other, their Fig. 6; pysim's ``spine_contact: end_bonds``) count as two
-    where both overlap, ``|r_b| < R_i + R_j``; otherwise one. Overlapping bonds count as
+    where both overlap, ``|r_b| < R_i + R_j`` (or touch within the row's own gap, for
+    tables of contacts found with a tolerance); otherwise one. Overlapping bonds count as
     one when their points lie within ``apart`` times the shorter spine of each other on
     both spines (a tip against a tip, or a tilted pair touching near two ends: the same
     contact, not the two ends of a side). Unlike :func:`parallel_side_contacts` no angle
@@ -176,10 +177,13 @@ def end_bond_counts(frame: Frame, contacts: Contacts, apart: float = 0.25) -> np
         t[:, k] = np.clip(np.sum(uj * (s[:, k, None] * ui - d), axis=1), -hj, hj)
         t[:, 2 + k] = sign * hj  # the ends of spine j against spine i
         s[:, 2 + k] = np.clip(np.sum(ui * (d + t[:, 2 + k, None] * uj), axis=1), -hi, hi)
+    # a row of a geometric table may touch at a gap (overlap down to -tolerance): its
+    # bonds count at that gap too
+    limit = reach + np.maximum(-np.asarray(contacts.overlap, float), 0.0) + 1e-12 * reach
     touch = np.empty((len(a), 4), bool)
     for k in range(4):
         r = d + t[:, k, None] * uj - s[:, k, None] * ui
-        touch[:, k] = np.einsum("ij,ij->i", r, r) < reach**2
+        touch[:, k] = np.einsum("ij,ij->i", r, r) < limit**2
     near = apart * 2.0 * np.minimum(hi, hj)
     count = np.zeros(len(a), np.int64)
     for k in range(4):
@@ -253,8 +257,11 @@ class ContactNumber(Observable):
     :func:`default_c_min`: 4 for frictionless 3-D spheres, 6 for frictionless 3-D rods,
     ``d`` for frictional grains); ``friction``: the packing's Coulomb coefficient ``mu``
     (the case's ``contact.friction``), which picks the default rule;
-    ``double_parallel``: count parallel side-side contacts as two bonds in ``z_bonds``
-    (default: in 2-D frames only); ``tol``, ``angle_tol`` of the tip and parallel tests.
+    ``double_parallel``: count side contacts as two bonds in ``z_bonds`` (default: in
+    2-D frames only), by ``bond_rule`` ``"overlap"`` (the default: both end bonds of the
+    pair overlap, :func:`end_bond_counts`, Marschall & Teitel's constraint count) or
+    ``"parallel"`` (side-side contacts of spines parallel within ``angle_tol``,
+    :func:`parallel_side_contacts`); ``tol``, ``angle_tol`` of the tip and parallel tests.
 
     Results: ``per_particle`` (N,) ``C_i`` (walls included), ``z`` mean ``<C>`` (particle
     contacts ``2 N_c / N`` plus wall contacts ``N_w / N``), ``rattlers`` (N,) bool,
@@ -269,13 +276,16 @@ class ContactNumber(Observable):
 
     def __init__(self, c_min: int | None = None, rule: str = "auto",
                  double_parallel: bool | None = None, tol: float = 1e-6, angle_tol: float = 1e-6,
-                 friction: float = 0.0):
+                 friction: float = 0.0, bond_rule: str = "overlap"):
         if c_min is not None and c_min < 0:
             raise ValueError(f"c_min must be >= 0, got {c_min}")
         if rule not in ("threshold", "2d", "auto"):
             raise ValueError(f"rule must be 'auto', 'threshold' or '2d', got {rule!r}")
         if not friction >= 0:
             raise ValueError(f"friction must be a number >= 0, got {friction}")
+        if bond_rule not in ("overlap", "parallel"):
+            raise ValueError(f"bond_rule must be 'overlap' or 'parallel', got {bond_rule!r}")
+        self.bond_rule = bond_rule
         self.c_min, self.rule, self.double_parallel = c_min, rule, double_parallel
         self.tol, self.angle_tol, self.friction = tol, angle_tol, float(friction)
 
@@ -312,7 +322,9 @@ class ContactNumber(Observable):
         n_bb = int(np.count_nonzero(~ratt))
         double = self.double_parallel if self.double_parallel is not None else frame.dim == 2
         bonds = np.ones(len(a), np.int64)
-        if double and len(a):
+        if double and len(a) and self.bond_rule == "overlap":
+            bonds = end_bond_counts(frame, pp)
+        elif double and len(a):
             bonds += parallel_side_contacts(frame, pp, self.angle_tol, self.tol)
         n_once = 2.0 * np.count_nonzero(keep) + np.count_nonzero(keep_w)
         n_bonds = 2.0 * np.sum(bonds[keep]) + np.count_nonzero(keep_w)

@@ -418,6 +418,11 @@ def test_end_bonds_count_a_side_contact_twice_when_both_ends_overlap():
         assert end_bond_counts(fr, c).tolist() == [bonds], tilt
     fr, c = pair(1e-5)
     assert not parallel_side_contacts(fr, c).any()  # the angle test counts it once
+    # ContactNumber's z_bonds counts by overlap unless told otherwise (no rattler rule:
+    # a pair alone would be all rattlers)
+    assert ContactNumber(c_min=0).compute(fr, c).z_bonds == pytest.approx(2.0)  # 2 x 2 bonds / 2
+    assert ContactNumber(c_min=0, bond_rule="parallel").compute(fr, c).z_bonds == \
+        pytest.approx(1.0)
     fr, c = pair(0.0, shift=(length + gap, 0.0))  # collinear, tip against tip
     assert end_bond_counts(fr, c).tolist() == [1]
     fr, c = pair(0.0, lengths=(0.0, 0.0))  # disks
