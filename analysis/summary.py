@@ -266,7 +266,8 @@ def analyse_jammed(run_dir, c_min: int | None = None, friction: float = 0.0):
     ``z_j`` (rattler-free, each
     contact once: ``z_tilde``), ``z_j_bonds`` (2-D parallel side contacts counted twice),
     the fractions of tip-tip, tip-side and side-side contacts, the fraction of rods with
-    a contact on a flat side (``flat_side_contact_fraction``), and the orientational
+    a contact on a flat side (``flat_side_contact_fraction``; ``_backbone``: of the
+    rattler-free rods), and the orientational
     order ``s2``, ``s4`` (2-D) or ``s_nematic`` (3-D) of the final frame. ``converged``
     is the record's own verdict (``jammed.json``, ``docs/formats.md``).
     """
@@ -298,8 +299,10 @@ def analyse_jammed(run_dir, c_min: int | None = None, friction: float = 0.0):
         types = ContactTypes().compute(frame, contacts)
         rows += [(f"fraction_{k.replace('-', '_')}", float(v), np.nan)
                  for k, v in zip(TYPE_NAMES, types.fractions)]
-        rows.append(("flat_side_contact_fraction",
-                     flat_side_contact_fraction(frame, contacts), np.nan))
+        rows += [("flat_side_contact_fraction",
+                  flat_side_contact_fraction(frame, contacts), np.nan),
+                 ("flat_side_contact_fraction_backbone",
+                  flat_side_contact_fraction(frame, contacts, ~cn.rattlers), np.nan)]
         if frame.dim == 2:
             order = OrientationOrder2D().compute(frame)
             rows += [("s2", order.S2, np.nan), ("s4", order.S4, np.nan),
