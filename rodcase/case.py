@@ -333,7 +333,8 @@ def _check_case(case: dict, source: str, at: str):
                           f"bond_number); got dimension {dim}, friction {c['friction']}")
     if c["friction"] > 0 and not c["k_t"] > 0:
         raise ConfigError(f"{source}: {at}contact.k_t = {c['k_t']} must be > 0 when "
-                          f"friction = {c['friction']} > 0")
+                          f"friction = {c['friction']} > 0 (law {c['law']}; for the linear "
+                          f"law it defaults to 2/7 k_n = {KT_PER_KN * c['k_n']:.4g})")
     if c.get("wall_friction", 0.0) > 0 and not c["k_t"] > 0:
         raise ConfigError(f"{source}: {at}contact.k_t = {c['k_t']} must be > 0 when "
                           f"wall_friction = {c['wall_friction']} > 0")
@@ -405,6 +406,13 @@ def _derive_contact(case: dict, source: str, at: str):
         if "k_n" not in c:
             raise ConfigError(f"{source}: {at}contact.k_n is required (or give restitution and "
                               "contact_time)")
+        frictional = max(c.get("friction", 0.0), c.get("wall_friction", 0.0)) > 0
+        if frictional and c["law"] == "hooke" and not c.get("k_t", 0.0) > 0:
+            # the linear law's usual tangential spring (equal normal and tangential
+            # periods of a sphere contact), and half the normal damping
+            c["k_t"] = KT_PER_KN * c["k_n"]
+            if not c.get("gamma_t", 0.0) > 0:
+                c["gamma_t"] = GT_PER_GN * c.get("gamma_n", 0.0)
         return
     if c["law"] != "hooke":
         raise ConfigError(f"{source}: {at}contact.restitution needs law: hooke, not "

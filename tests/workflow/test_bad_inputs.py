@@ -18,6 +18,8 @@ GOOD = {
     "protocol": {"name": "compress", "phi_init": 0.3, "rate": 0.005, "phi_final": 0.7, "dt": 1e-4},
     "seed": 1,
 }
+
+
 class _Drop:
     """The key is left out of the case (a stable repr: test ids must be the same in
     every pytest-xdist worker)."""
@@ -59,7 +61,6 @@ CASES = [
     (("contact", "k_n"), DROP,
      "contact.k_n is required (or give restitution and contact_time)"),
     (("contact", "gamma_n"), -1, "contact.gamma_n = -1 is not allowed; use a number >= 0"),
-    (("contact", "friction"), 0.5, "contact.k_t = 0.0 must be > 0 when friction = 0.5 > 0"),
     (("contact", "friction"), -0.1,
      "contact.friction = -0.1 is not allowed; use a number >= 0 and <= 10"),
     (("contact", "stiffness"), 5,
@@ -331,3 +332,18 @@ def test_cli_threads_out_of_range(tmp_path, threads):
         r = cli(tmp_path, *cmd, "--threads", threads, env=env)
         assert_refused(r, tmp_path, f"error: --threads {threads} is not allowed; use 1 to 2 "
                                     "(at most Numba's pool, NUMBA_NUM_THREADS")
+
+
+def test_friction_without_k_t_takes_the_linear_laws_default():
+    """With the linear law, friction alone gives k_t = 2/7 k_n and gamma_t = gamma_n / 2
+    (a given k_t or gamma_t stays); with another law k_t must be given, and the message
+    says what the linear law would use."""
+    case = validate_case({**GOOD, "contact": {**GOOD["contact"], "friction": 0.5}})
+    assert case["contact"]["k_t"] == pytest.approx(2 / 7 * 1e5)
+    assert case["contact"]["gamma_t"] == pytest.approx(50.0)
+    given = validate_case({**GOOD, "contact": {**GOOD["contact"], "friction": 0.5, "k_t": 1e4}})
+    assert given["contact"]["k_t"] == 1e4 and given["contact"]["gamma_t"] == 0.0
+    with pytest.raises(ConfigError, match=r"contact.k_t = 0.0 must be > 0 when friction = 0.5 "
+                                          r"> 0 \(law hertz; for the linear law it defaults"):
+        validate_case({**GOOD, "contact": {**GOOD["contact"], "law": "hertz",
+                                           "friction": 0.5}})
