@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 import pandas as pd
+import pytest
 
 from rodcase.case import load_case, read_yaml
 from workflows.studies import validate_config
@@ -75,3 +76,43 @@ def test_example_study_is_the_example_case():
     cfg = validate_config(read_yaml(ROOT / "examples/rods_alpha2_friction_study.yaml"))
     case = load_case(ROOT / "examples/rods_alpha2_friction.yaml")
     assert cfg["_cases"][("rods_alpha2_friction", "base", case["seed"])] == case
+
+
+# every other case file in examples/, with the range its phi_J must fall in (its header
+# says what to expect) and the fit window its analysis needs
+OTHER_EXAMPLES = {
+    "spheres.yaml": ((0.62, 0.66), None),
+    "rods_alpha2.yaml": ((0.60, 0.72), None),
+    "rods_2d.yaml": ((0.85, 0.90), ("1e-3", "5e-3")),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(OTHER_EXAMPLES))
+def test_every_example_runs_as_written(tmp_path, name):
+    """The commands of the README's example on each of the other case files: a run and
+    its analysis, with a finite phi_J in the range the file's header announces."""
+    (lo, hi), window = OTHER_EXAMPLES[name]
+    case = ROOT / "examples" / name
+    env = dict(os.environ, NUMBA_NUM_THREADS="1")
+    py = [sys.executable, "-m"]
+    for cmd in (py + ["pysim", "init", str(case), "--out", str(tmp_path / "init.data")],
+                py + ["pysim", "run", str(case), "--data", str(tmp_path / "init.data"),
+                      "--out", str(tmp_path / "pysim"), "--no-progress"],
+                py + ["workflows.scripts.analyse_run", "--case", str(case), "--run",
+                      str(tmp_path / "pysim"), "--engine", "pysim", "--study", "example",
+                      "--variant", "base", "--seed", "1", "--observables",
+                      str(tmp_path / "observables.csv"), "--curves", str(tmp_path / "curves.csv"),
+                      *(["--window", *window] if window else [])]):
+        proc = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True,
+                              timeout=600)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+    values = pd.read_csv(tmp_path / "observables.csv").set_index("observable")["value"]
+    assert lo < values["phi_j"] < hi, values["phi_j"]
+    assert math.isfinite(values["z_j"])
+
+
+def test_every_example_file_is_covered():
+    shipped = {p.name for p in (ROOT / "examples").glob("*.yaml")}
+    assert shipped == set(OTHER_EXAMPLES) | {"rods_alpha2_friction.yaml",
+                                              "rods_alpha2_friction_study.yaml"}
