@@ -48,7 +48,6 @@ def test_good_case_gets_defaults():
     (("particles", "n"), "many", r"particles\.n = 'many' .*type integer"),
     (("particles", "n"), 10, r"particles\.n = 10 is too small for a periodic box"),
     (("contact", "k_n"), KeyError, r"contact\.k_n is required \(or give restitution and contact_time\)"),
-    (("contact", "friction"), 0.5, r"contact\.k_t = 0\.0 must be > 0 when friction"),
 ])
 def test_bad_case_values(path, value, message):
     with pytest.raises(ConfigError, match=message) as exc:
@@ -309,9 +308,14 @@ def test_wall_friction_alone_gets_the_derived_tangential_spring():
         c["gamma_n"] / 2)
     smooth = validate_case(tap_case(contact__friction=0.0))
     assert smooth["contact"]["k_t"] == 0.0 and smooth["contact"]["gamma_t"] == 0.0
+    # given k_n: the linear law's default too; another law must give k_t
+    direct = validate_case(with_value(("contact", "wall_friction"), 0.3))
+    assert direct["contact"]["k_t"] == pytest.approx(2 / 7 * 1e5)
+    hertz = with_value(("contact", "wall_friction"), 0.3)
+    hertz["contact"]["law"] = "hertz"
     with pytest.raises(ConfigError, match=r"contact\.k_t = 0\.0 must be > 0 when wall_friction "
                                           r"= 0\.3 > 0"):
-        validate_case(with_value(("contact", "wall_friction"), 0.3), "case.yaml")
+        validate_case(hertz, "case.yaml")
 
 
 def feed_case(**changes):
