@@ -164,19 +164,15 @@ def end_bond_counts(frame: Frame, contacts: Contacts, apart: float = 0.25) -> np
     enters: a pair tilted by less than about ``overlap / (L/2)`` has both ends in
     contact. Overlaps near jamming are small, so this needs positions to more digits
     than their ratio to the box (the dumps keep 10)."""
+    from analysis.geometry import end_bond_params
+
     a = frame.index_of(contacts.i)
     b = frame.index_of(contacts.j)
     d = frame.minimum_image(frame.x[b] - frame.x[a])
     ui, uj = frame.axis[a], frame.axis[b]
     hi, hj = 0.5 * frame.length[a], 0.5 * frame.length[b]
     reach = frame.radius[a] + frame.radius[b]
-    s = np.empty((len(a), 4))
-    t = np.empty((len(a), 4))
-    for k, sign in enumerate((-1.0, 1.0)):  # the ends of spine i against spine j
-        s[:, k] = sign * hi
-        t[:, k] = np.clip(np.sum(uj * (s[:, k, None] * ui - d), axis=1), -hj, hj)
-        t[:, 2 + k] = sign * hj  # the ends of spine j against spine i
-        s[:, 2 + k] = np.clip(np.sum(ui * (d + t[:, 2 + k, None] * uj), axis=1), -hi, hi)
+    s, t = end_bond_params(d, ui, hi, uj, hj)
     # a row of a geometric table may touch at a gap (overlap down to -tolerance): its
     # bonds count at that gap too
     limit = reach + np.maximum(-np.asarray(contacts.overlap, float), 0.0) + 1e-12 * reach

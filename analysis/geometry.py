@@ -214,6 +214,25 @@ def inside(p, c, u, radius, length) -> np.ndarray:
     return point_segment_distance(p, c, u, 0.5 * np.asarray(length)) <= np.asarray(radius)
 
 
+def end_bond_params(d, ui, hi, uj, hj) -> tuple[np.ndarray, np.ndarray]:
+    """Spine parameters ``(s, t)`` (M, 4) of the four end bonds of pairs (pysim's
+    ``spine_contact: end_bonds``; Marschall & Teitel 2018, Fig. 6): bonds 0, 1 join the
+    ends ``s = -h_i, +h_i`` of spine i to their closest points on spine j, bonds 2, 3 the
+    ends ``t = -h_j, +h_j`` of spine j to spine i: ``t = clamp(u_j . (s u_i - d))``,
+    ``s = clamp(u_i . (d + t u_j))``. ``d`` (M, 3) from ``x_i`` to ``x_j`` (minimum
+    image), ``ui``, ``uj`` (M, 3) unit spines, ``hi``, ``hj`` (M,) half-lengths."""
+    d, ui, uj = (np.asarray(v, dtype=np.float64).reshape(-1, 3) for v in (d, ui, uj))
+    hi, hj = (np.asarray(v, dtype=np.float64).reshape(-1) for v in (hi, hj))
+    s = np.empty((len(d), 4))
+    t = np.empty((len(d), 4))
+    for k, sign in enumerate((-1.0, 1.0)):
+        s[:, k] = sign * hi
+        t[:, k] = np.clip(np.sum(uj * (s[:, k, None] * ui - d), axis=1), -hj, hj)
+        t[:, 2 + k] = sign * hj
+        s[:, 2 + k] = np.clip(np.sum(ui * (d + t[:, 2 + k, None] * uj), axis=1), -hi, hi)
+    return s, t
+
+
 #: |u_a x u_b|^2 below which two spines are treated as parallel
 PARALLEL_TOL = 1e-10
 

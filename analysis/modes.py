@@ -55,16 +55,14 @@ def _bonds(frame: Frame, i: int, j: int, end_bonds: bool):
                              "(contact.spine_contact: end_bonds): the closest-point law "
                              "has a kink at parallel contacts")
         return [(0.0, 0.0, 0)]
-    d = frame.minimum_image(frame.x[j] - frame.x[i])[:2]
-    ui, uj = frame.axis[i, :2], frame.axis[j, :2]
-    out = []
-    for s in (-hi, hi):
-        t = float(uj @ (s * ui - d))
-        out.append((s, min(max(t, -hj), hj), 2 if abs(t) < hj else 0))
-    for t in (-hj, hj):
-        s = float(ui @ (d + t * uj))
-        out.append((min(max(s, -hi), hi), t, 1 if abs(s) < hi else 0))
-    return out
+    from analysis.geometry import end_bond_params
+
+    d = frame.minimum_image(frame.x[j] - frame.x[i])
+    s, t = end_bond_params(d, frame.axis[i], hi, frame.axis[j], hj)
+    # a closest point inside its spine slides with the packing (2: on j, 1: on i)
+    return [(float(s[0, k]), float(t[0, k]),
+             (2 if abs(t[0, k]) < hj else 0) if k < 2 else (1 if abs(s[0, k]) < hi else 0))
+            for k in range(4)]
 
 
 def hessian_parts(frame: Frame, pairs: np.ndarray, dof: np.ndarray, k_n: float = 1.0,
