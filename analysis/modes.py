@@ -167,3 +167,22 @@ def mode_table(omega2: np.ndarray, vecs: np.ndarray, dofs: np.ndarray,
     return {"omega": np.sign(omega2) * np.sqrt(np.abs(omega2)), "omega2": omega2,
             "pr": participation_ratio(vecs, dofs), "rotational": ch[:, 0],
             "parallel": ch[:, 1], "perpendicular": ch[:, 2]}
+
+
+def bands(omega2: np.ndarray, n_bands: int, zero: float) -> np.ndarray:
+    """Band of each mode (0 the lowest; -1 for zero and unstable modes,
+    ``omega^2 <= zero``): the other modes, ordered by frequency, split at the ``n_bands - 1`` widest gaps of
+    ``log omega``. Marschall & Teitel (2018, Sec. III.D) find two bands at alpha = 0.01
+    and three at alpha = 1 and 4, separated by gaps of decades."""
+    if n_bands < 1:
+        raise ValueError(f"n_bands must be at least 1, got {n_bands}")
+    omega2 = np.asarray(omega2, float)
+    out = np.full(omega2.shape, -1, np.int64)
+    live = np.flatnonzero(omega2 > zero)
+    if len(live) < n_bands:
+        raise ValueError(f"{len(live)} nonzero modes cannot form {n_bands} bands")
+    order = live[np.argsort(omega2[live], kind="stable")]
+    gaps = np.diff(np.log(omega2[order]))  # log omega^2 = 2 log omega: same order of gaps
+    cuts = np.sort(np.argsort(gaps, kind="stable")[::-1][: n_bands - 1]) + 1
+    out[order] = np.searchsorted(cuts, np.arange(len(order)), side="right")
+    return out

@@ -87,8 +87,26 @@ def reference_rows(case: dict, references, kind: str = "value", free=()) -> pd.D
     return refs[sel]
 
 
+#: per-state columns of a study's ``modes.csv`` (workflows/scripts/modes.py) that
+#: reference rows name as observables
+MODE_OBSERVABLES = ("mode_fraction_low", "mode_fraction_middle", "mode_fraction_high")
+
+
+def mode_rows(study: str, path: Path) -> pd.DataFrame:
+    """The band fractions of a study's ``modes.csv`` (one row per pysim stable state) as
+    ``summary.csv`` rows, without an uncertainty (each is one state's count)."""
+    modes = pd.read_csv(path)
+    long = modes.melt(id_vars=["variant", "seed"], value_vars=list(MODE_OBSERVABLES),
+                      var_name="observable", value_name="value")
+    return pd.DataFrame({"study": study, "case": long["variant"], "engine": "pysim",
+                         "seed": long["seed"].str.removeprefix("seed").astype(int),
+                         "observable": long["observable"], "value": long["value"],
+                         "uncertainty": float("nan")})
+
+
 def run_table(results_dirs) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """``(runs, results)`` of every ``summary.csv`` under ``results_dirs``: one run row per
+    """``(runs, results)`` of every ``summary.csv`` under ``results_dirs`` (with the band
+    fractions of any ``<study>/modes.csv`` beside it): one run row per
     ``study, case, engine, seed`` with :func:`case_terms` of its ``case.yaml``
     (``<results>/<study>/<case>/seed<k>/case.yaml``). A folder without a summary is
     skipped."""
@@ -100,6 +118,8 @@ def run_table(results_dirs) -> tuple[pd.DataFrame, pd.DataFrame]:
         df = pd.read_csv(summary)
         parts.append(df[["study", "case", "engine", "seed", "observable", "value",
                          "uncertainty"]])
+        parts += [mode_rows(study, root / study / "modes.csv")
+                  for study in df["study"].unique() if (root / study / "modes.csv").is_file()]
         terms_of: dict[tuple, dict] = {}
         for (study, case, engine, seed), _ in df.groupby(["study", "case", "engine", "seed"]):
             key = (study, case, seed)

@@ -100,3 +100,29 @@ def test_participation_ratio_and_character_of_hand_built_modes():
     w2, v = modes.normal_modes(np.diag([4.0, 1.0, 9.0, 4.0, 1.0, 9.0]), np.array(
         [1.0, 1.0, 9.0, 4.0, 4.0, 9.0]))
     np.testing.assert_allclose(w2, [0.25, 1.0, 1.0, 1.0, 1.0, 4.0])
+
+
+def test_bands_split_at_the_widest_gaps_of_log_omega():
+    rng = np.random.default_rng(3)
+    low = 10 ** rng.uniform(-8, -7, 40)  # omega^2
+    middle = 10 ** rng.uniform(-4.5, -4, 7)
+    high = 10 ** rng.uniform(-2, 0, 200)
+    w2 = rng.permutation(np.concatenate([[0.0, -1e-17, 1e-15], low, middle, high]))
+    zero = 1e-12
+    three = modes.bands(w2, 3, zero)
+    assert np.sum(three == -1) == 3
+    assert [np.sum(three == k) for k in range(3)] == [40, 7, 200]
+    assert np.all(three[np.isin(w2, middle)] == 1)
+    # two bands: the gap between low and middle (3 decades of omega^2) is the widest
+    two = modes.bands(w2, 2, zero)
+    assert [np.sum(two == k) for k in range(2)] == [40, 207]
+    # a lone mode inside a gap halves it: it joins the nearer side of the wider half
+    lone = modes.bands(np.concatenate([low, [1e-3], high]), 2, zero)
+    assert [np.sum(lone == k) for k in range(2)] == [40, 201]
+
+
+def test_bands_refuse_more_bands_than_modes():
+    with pytest.raises(ValueError, match="n_bands must be at least 1"):
+        modes.bands(np.ones(3), 0, 1e-12)
+    with pytest.raises(ValueError, match="2 nonzero modes cannot form 3 bands"):
+        modes.bands(np.array([0.0, 1.0, 2.0]), 3, 1e-12)

@@ -8,7 +8,7 @@ import yaml
 from analysis.vs_paper import read_references
 from workflows.scripts.vs_paper import main
 from workflows.vs_paper import (BLOCK_BEGIN, BLOCK_END, STUDY_DOCS, case_terms, family,
-                                markdown_table, with_block)
+                                markdown_table, run_table, with_block)
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -98,6 +98,29 @@ def test_a_run_at_other_conditions(tmp_path):
     assert main(["--references", str(refs), "--results", str(results), "--out", str(out)]) == 0
     v = pd.read_csv(out).verdict.iloc[0]
     assert v == "conditions differ: tap (ours 400, paper 2000)"
+
+
+def test_band_fractions_of_modes_csv_join_the_runs(tmp_path):
+    root = tmp_path / "results"
+    rows = []
+    for seed in (1, 2):
+        d = root / "j2d" / "alpha4" / f"seed{seed}"
+        d.mkdir(parents=True)
+        (d / "case.yaml").write_text(yaml.safe_dump({**CASE_2D, "particles": {
+            **CASE_2D["particles"], "aspect_ratio": 4.0}}))
+        rows.append({"study": "j2d", "case": "alpha4", "engine": "pysim", "seed": seed,
+                     "observable": "phi_j", "value": 0.86, "uncertainty": float("nan")})
+    pd.DataFrame(rows).to_csv(root / "summary.csv", index=False)
+    pd.DataFrame({"variant": ["alpha4", "alpha4"], "seed": ["seed1", "seed2"],
+                  "mode_fraction_low": [0.06, 0.07], "mode_fraction_middle": [0.001, 0.0],
+                  "mode_fraction_high": [0.939, 0.93], "bonds": [2800, 2790]}
+                 ).to_csv(root / "j2d" / "modes.csv", index=False)
+    runs, results = run_table([root])
+    low = results[results.observable == "mode_fraction_low"].sort_values("seed")
+    assert list(low.seed) == [1, 2] and list(low.value) == [0.06, 0.07]
+    assert set(low.engine) == {"pysim"} and set(low.case) == {"alpha4"}
+    assert "bonds" not in set(results.observable)
+    assert len(runs) == 2
 
 
 def test_a_bad_reference_table_is_one_line(tmp_path, capsys):

@@ -73,6 +73,7 @@ rule summary:
 rule vs_paper:
     input:
         summary=f"{RESULTS}/summary.csv",
+        modes=lambda wc: [f"{RESULTS}/{s}/modes.csv" for s in modes_studies()],
         references=sorted(glob.glob(os.path.join(REFERENCES, "*.csv"))),
     output:
         table=report(

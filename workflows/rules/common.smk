@@ -86,6 +86,20 @@ def deposit_trend(study):
     return "alpha" in params or params - FOLLOW_BOND_NUMBER == {"bond_number"}
 
 
+def modes_studies():
+    """The studies whose stable states get their vibrational modes (rule plot_modes):
+    2-D harmonic ``jammed`` studies run on pysim."""
+    out = []
+    for study in sorted({s for s, _ in study_variants()}):
+        if CFG["studies"][study]["case"]["protocol"]["name"] != "jammed":
+            continue
+        cases = [c for k, c in CFG["_cases"].items() if k[0] == study]
+        if any(c["particles"].get("dimension", 3) == 2 and c["contact"]["law"] == "harmonic"
+               for c in cases) and any(r.study == study and r.engine == "pysim" for r in RUNS):
+            out.append(study)
+    return out
+
+
 def get_final_output():
     out = [f"{RESULTS}/summary.csv", f"{RESULTS}/comparison.csv", f"{RESULTS}/failures.csv",
            f"{RESULTS}/vs_paper.csv", f"{RESULTS}/landing.html"]
@@ -111,10 +125,7 @@ def get_final_output():
         if any(c["particles"].get("dimension", 3) == 2 and c["particles"]["aspect_ratio"] > 0
                for c in cases) and study not in tapping | deposit:
             out.append(f"{RESULTS}/{study}/figures/contact_angles.png")  # 2-D rods: P(varphi)
-        if protocol[study] == "jammed" and any(
-            c["particles"].get("dimension", 3) == 2 and c["contact"]["law"] == "harmonic"
-            for c in cases
-        ) and any(r.study == study and r.engine == "pysim" for r in RUNS):
+        if study in modes_studies():
             out.append(f"{RESULTS}/{study}/figures/modes.png")  # dynamical matrix
         if protocol[study] == "compress" and len({c["particles"]["n"] for c in cases}) > 1 and all(
             c["particles"].get("dimension", 3) == 2 and c["particles"]["aspect_ratio"] > 0

@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 
 from analysis import modes as am
-from analysis.contacts import remove_rattlers_2d
+from analysis.contacts import end_bond_counts, remove_rattlers_2d
 from analysis.frame import Contacts, Frame
 from analysis.io import RunData
 from rodcase.case import load_case
@@ -53,8 +53,12 @@ def stable_state_modes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
     ``omega2``, ``pr``, the rotational / parallel / perpendicular fractions, and
     ``omega_k`` of the stiffness part alone; each ascending) and a summary (particles
     and degrees of freedom of the backbone, contact pairs, zero modes of ``H`` and of
-    ``H_k``, negative modes of ``H``, the largest stress-part entry relative to the
-    stiffness part's, the relaxed ``U/L^2`` and residuals, and ``exact``: whether the
+    ``H_k``, negative modes of ``H``, the backbone's ``bonds`` (a side contact twice,
+    :func:`analysis.contacts.end_bond_counts`) beside the ``modes_above_gap`` (above the
+    widest gap of the spectrum: the paper finds one per bond at jamming), the fractions of
+    all modes in the three bands split at the two widest gaps (``mode_fraction_low``,
+    ``_middle``, ``_high``: the paper's bands at alpha >= 1), the largest stress-part
+    entry relative to the stiffness part's, the relaxed ``U/L^2`` and residuals, and ``exact``: whether the
     full-precision state was read)."""
     from pysim import checkpoint
     from pysim.protocols import jammed
@@ -97,10 +101,19 @@ def stable_state_modes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
     table = pd.DataFrame(am.mode_table(w2, vecs, dof, fr.axis))
     table["omega_k"] = np.sign(wk2) * np.sqrt(np.abs(wk2))
     top = float(np.abs(w2).max())
+    backbone = keep[fr.index_of(ct.i)] & keep[fr.index_of(ct.j)]
+    bonds = (end_bond_counts(fr, ct.subset(backbone)).sum() if end_bonds
+             else int(backbone.sum()))
+    two = am.bands(w2, 2, ZERO * top)
+    three = am.bands(w2, 3, ZERO * top)
     summary = {"n_particles": int(keep.sum()), "n_dof": len(dof), "n_pairs": len(pairs),
                "zero_modes": int(_zero(w2, top).sum()),
                "zero_modes_stiffness": int(_zero(wk2, top).sum()),
                "negative_modes": int(np.sum(w2 < -ZERO * top)),
+               # the paper's count: N z/2 modes above the gap, one per bond
+               "bonds": int(bonds), "modes_above_gap": int(np.sum(two == 1)),
+               **{f"mode_fraction_{name}": float(np.mean(three == k))
+                  for k, name in enumerate(("low", "middle", "high"))},
                "stress_over_stiffness": float(np.abs(hs).max() / np.abs(hk).max()),
                "energy_density": jammed.energy_density(sim, d_min),
                "exact": exact.exists(), **res}
