@@ -21,8 +21,11 @@ and where the closest point (``t``, or ``s``) lies inside its spine it slides wi
 packing, which subtracts ``D_qm D_mq / D_mm`` (``m`` its parameter; envelope theorem).
 ``H = H_k + H_s`` with the **stiffness part** ``H_k = sum_b V'' grad delta grad delta^T``
 and the **stress part** ``H_s = sum_b V' grad grad delta``, proportional to the bond
-forces ``V' = k_n delta / d^2``. The dynamical matrix is ``D = M^(-1/2) H M^(-1/2)`` with
-``M`` the masses and moments of inertia; its eigenvalues are ``omega^2``. Units: those
+forces ``V' = k_n delta / d^2``. The dynamical matrix is ``D = M^(-1/2) H M^(-1/2)``,
+its eigenvalues ``omega^2``: with ``M`` the masses and moments of inertia
+(:func:`dof_masses`), or, as Marschall & Teitel (2018) define it, the Hessian in the
+coordinates ``(x, y, A theta)`` (:func:`dof_lengths`), which moves rotational modes by
+orders of magnitude for nearly round rods. Units: those
 of the positions and of ``k_n``; angles in radians.
 """
 from __future__ import annotations
@@ -119,6 +122,13 @@ def dof_masses(mass: np.ndarray, inertia: np.ndarray, dofs: np.ndarray) -> np.nd
     """Mass of each degree of freedom: ``m_i`` for centres, ``I_i`` (about the axis
     normal to the plane) for angles."""
     return np.where(dofs[:, 1] < 2, mass[dofs[:, 0]], inertia[dofs[:, 0]])
+
+
+def dof_lengths(half_length: np.ndarray, dofs: np.ndarray) -> np.ndarray:
+    """Weights of Marschall & Teitel's (2018) dynamical matrix, Eq. 23, for
+    :func:`normal_modes`: it is the Hessian in the coordinates ``(x, y, A theta)`` with no
+    masses, so 1 for centres and ``A_i^2`` (``A_i`` the spine half-length) for angles."""
+    return np.where(dofs[:, 1] < 2, 1.0, np.asarray(half_length, float)[dofs[:, 0]] ** 2)
 
 
 def normal_modes(hessian: np.ndarray, masses: np.ndarray):

@@ -52,7 +52,9 @@ def test_modes_of_a_relaxed_rod_packing(tmp_path):
     assert summary["zero_modes_stiffness"] >= summary["zero_modes"]
     assert summary["force_residual_max"] < 1e-3
     assert table.omega2.is_monotonic_increasing
-    assert table.pr.between(0, 1).all()
+    # a rigid translation spreads evenly over the particles in the paper's coordinates:
+    # its ratio is 1 to rounding
+    assert table.pr.between(0, 1 + 1e-12).all()
     fractions = table[["rotational", "parallel", "perpendicular"]].sum(axis=1)
     np.testing.assert_allclose(fractions, 1.0, atol=1e-9)
     out = tmp_path / "figures" / "modes.png"
@@ -63,6 +65,20 @@ def test_modes_of_a_relaxed_rod_packing(tmp_path):
     assert list(rows.variant) == ["alpha1"] and rows.n_dof.iloc[0] == summary["n_dof"]
     per_mode = pd.read_csv(tmp_path / "modes.modes.csv.gz")
     assert len(per_mode) == summary["n_dof"]
+
+
+def test_the_papers_coordinates_and_the_masses_share_zero_and_negative_modes(tmp_path):
+    run = fake_jammed_run(tmp_path)
+    paper, s_paper = modes.stable_state_modes(run, "paper")
+    mass, s_mass = modes.stable_state_modes(run, "mass")
+    # the two matrices are congruent (Sylvester's law of inertia), but their spectra and
+    # modes differ: the paper's rotations are weighed by A^2, ours by the moment of inertia
+    assert s_paper["metric"] == "paper" and s_mass["metric"] == "mass"
+    for key in ("zero_modes", "negative_modes", "n_dof", "bonds"):
+        assert s_paper[key] == s_mass[key]
+    assert not np.allclose(paper.omega2, mass.omega2)
+    with pytest.raises(ValueError, match="metric 'inertia' is not one of paper, mass"):
+        modes.stable_state_modes(run, "inertia")
 
 
 def test_modes_read_the_full_precision_state_when_there_is_one(tmp_path):

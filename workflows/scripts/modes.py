@@ -48,7 +48,13 @@ def _zero(w2: np.ndarray, top: float) -> np.ndarray:
     return np.abs(w2) < ZERO * top
 
 
-def stable_state_modes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
+#: how the dynamical matrix weighs the degrees of freedom: the paper's coordinates
+#: ``(x, y, A theta)`` with no masses (Marschall & Teitel 2018, Eq. 23), or the masses
+#: and moments of inertia
+METRICS = ("paper", "mass")
+
+
+def stable_state_modes(run_dir: Path, metric: str = "paper") -> tuple[pd.DataFrame, dict]:
     """Modes of the final frame of a ``jammed`` pysim run: a per-mode table (``omega``,
     ``omega2``, ``pr``, the rotational / parallel / perpendicular fractions, and
     ``omega_k`` of the stiffness part alone; each ascending) and a summary (particles
@@ -59,7 +65,9 @@ def stable_state_modes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
     all modes in the three bands split at the two widest gaps (``mode_fraction_low``,
     ``_middle``, ``_high``: the paper's bands at alpha >= 1), the largest stress-part
     entry relative to the stiffness part's, the relaxed ``U/L^2`` and residuals, and ``exact``: whether the
-    full-precision state was read)."""
+    full-precision state was read). ``metric`` is one of :data:`METRICS`."""
+    if metric not in METRICS:
+        raise ValueError(f"metric {metric!r} is not one of {', '.join(METRICS)}")
     from pysim import checkpoint
     from pysim.protocols import jammed
     from pysim.protocols.compress import simulation_from_case
@@ -95,9 +103,12 @@ def stable_state_modes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
     end_bonds = (case["contact"].get("spine_contact", "closest") == "end_bonds"
                  and bool(np.any(fr.length > 0)))
     hk, hs, _ = am.hessian_parts(fr, pairs, dof, k_n=k_n, end_bonds=end_bonds)
-    masses = am.dof_masses(state.mass, state.inertia[:, 0], dof)
-    w2, vecs = am.normal_modes(hk + hs, masses)
-    wk2, _ = am.normal_modes(hk, masses)
+    if metric == "paper":
+        weights = am.dof_lengths(0.5 * state.length, dof)
+    else:
+        weights = am.dof_masses(state.mass, state.inertia[:, 0], dof)
+    w2, vecs = am.normal_modes(hk + hs, weights)
+    wk2, _ = am.normal_modes(hk, weights)
     table = pd.DataFrame(am.mode_table(w2, vecs, dof, fr.axis))
     table["omega_k"] = np.sign(wk2) * np.sqrt(np.abs(wk2))
     top = float(np.abs(w2).max())
@@ -115,7 +126,7 @@ def stable_state_modes(run_dir: Path) -> tuple[pd.DataFrame, dict]:
                **{f"mode_fraction_{name}": float(np.mean(three == k))
                   for k, name in enumerate(("low", "middle", "high"))},
                "stress_over_stiffness": float(np.abs(hs).max() / np.abs(hk).max()),
-               "energy_density": jammed.energy_density(sim, d_min),
+               "energy_density": jammed.energy_density(sim, d_min), "metric": metric,
                "exact": exact.exists(), **res}
     return table, summary
 
@@ -175,6 +186,9 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, required=True, help="figure (.png)")
     ap.add_argument("--table", type=Path, required=True,
                     help="per-state summary (.csv); the per-mode table goes beside it (.modes.csv.gz)")
+    ap.add_argument("--metric", choices=METRICS, default="paper",
+                    help="dynamical matrix: the paper's Hessian in (x, y, A theta) "
+                         "(default) or mass-weighted")
     a = ap.parse_args(argv)
     from tqdm import tqdm
 
@@ -186,7 +200,7 @@ def main(argv=None) -> int:
             sys.stderr.write(f"modes: skipping {run} (status {record.get('status')}, "
                              f"converged {record.get('converged')})\n")
             continue
-        table, summary = stable_state_modes(run)
+        table, summary = stable_state_modes(run, a.metric)
         variant, seed = run.parent.parent.name, run.parent.name
         rows.append({"variant": variant, "seed": seed, **summary})
         per_mode.append(table.assign(variant=variant, seed=seed))
