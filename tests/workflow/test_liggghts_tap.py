@@ -20,7 +20,7 @@ from analysis.summary import analyse_tapping
 from pysim.initial import write_initial
 from pysim.protocols.tapping import plan
 from tests.conftest import needs_liggghts
-from tests.pysim.test_tapping import TAP, D
+from tests.cases import TAP, TAP_D as D
 from workflows import engines
 from rodcase.case import validate_case
 
