@@ -7,7 +7,7 @@ import pytest
 
 from analysis import modes
 from analysis.frame import Frame
-from tests.pysim.test_minimize import overlapping_rods
+from tests.pysim.helpers import overlapping_rods
 
 
 def frame_of(sim) -> Frame:

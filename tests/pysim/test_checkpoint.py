@@ -2,8 +2,6 @@
 import os
 import signal
 import subprocess
-import sys
-import time
 
 import numpy as np
 import yaml
@@ -14,6 +12,8 @@ from pysim.simulation import ContactModel, Simulation
 from pysim.state import State
 from pysim.walls import cylinder, plane
 from rodcase.case import validate_case
+from tests.cases import PYSIM_COMPRESS
+from tests.runs import pysim_run, start_mid_run
 
 
 def rods_in_a_tapped_cylinder():
@@ -87,42 +87,8 @@ def test_a_run_returning_at_its_list_rebuilds_is_bit_identical():
     assert_same(a, b)
 
 
-TINY = {
-    "particles": {"n": 200, "diameter": {"distribution": "mono", "mean": 1.0}},
-    "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 300.0, "gamma_bg": 1.0},
-    "protocol": {"name": "compress", "phi_init": 0.3, "phi_fast": 0.55, "rate_fast": 0.2,
-                 "rate": 0.02, "phi_final": 0.68, "dt": 1e-4},
-    "output": {"thermo_every": 500, "dump_every": 2000},
-    "seed": 9,
-}
-
-
-def pysim_run(case_path, data, out, *extra):
-    return [sys.executable, "-m", "pysim", "run", str(case_path), "--data", str(data), "--out",
-            str(out), "--no-progress", *extra]
-
-
-def start_mid_run(case_path, data, out) -> subprocess.Popen:
-    """A pysim run (checkpointing every chunk) in the background, returned once it has
-    checkpointed and written 40 thermo lines: mid-run, for a signal to stop it."""
-    # SIGINT back to its default in the child: a test suite started in the background of
-    # a non-interactive shell ignores SIGINT, the child inherits that, and Python then
-    # installs no KeyboardInterrupt handler (the Ctrl-C test failed so under 'make test &')
-    proc = subprocess.Popen(pysim_run(case_path, data, out, "--checkpoint-every", "0"),
-                            stderr=subprocess.PIPE, text=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    thermo_part = out / "thermo.dat.part"
-    deadline = time.time() + 120
-    while time.time() < deadline:
-        if (out / "checkpoint.npz").exists() and thermo_part.exists() \
-                and thermo_part.read_text().count("\n") > 40:
-            break
-        time.sleep(0.05)
-    return proc
-
-
 def test_kill_9_and_resume_gives_identical_files(tmp_path):
-    case = validate_case(TINY)
+    case = validate_case(PYSIM_COMPRESS)
     cp = tmp_path / "case.yaml"
     cp.write_text(yaml.safe_dump(case))
     write_initial(case, tmp_path / "init.data")
@@ -144,7 +110,7 @@ def test_kill_9_and_resume_gives_identical_files(tmp_path):
 
 
 def test_resume_without_checkpoint_is_a_clear_error(tmp_path):
-    case = validate_case(TINY)
+    case = validate_case(PYSIM_COMPRESS)
     cp = tmp_path / "case.yaml"
     cp.write_text(yaml.safe_dump(case))
     write_initial(case, tmp_path / "init.data")
@@ -157,7 +123,7 @@ def test_resume_without_checkpoint_is_a_clear_error(tmp_path):
 def test_ctrl_c_stops_with_a_message_and_the_run_resumes(tmp_path):
     """SIGINT (Ctrl-C) mid-run: one line on stderr, no traceback, exit status 130, the
     checkpoint kept; the same command with --resume finishes the run."""
-    case = validate_case(TINY)
+    case = validate_case(PYSIM_COMPRESS)
     cp = tmp_path / "case.yaml"
     cp.write_text(yaml.safe_dump(case))
     write_initial(case, tmp_path / "init.data")

@@ -5,74 +5,8 @@ import pytest
 
 from pysim.contacts import REC_COLUMNS, pair_forces
 from pysim.forces import HARMONIC, HERTZ, HOOKE, KEEP_SPRING, NO_TENSION, contact_params
-from pysim.geometry import segment_closest
 from pysim.neighbors import all_pairs, build_pairs
-
-
-def random_rods(rng, n, box, lmax, dim=3):
-    x = rng.uniform(0, 1, (n, 3)) * box
-    u = rng.normal(size=(n, 3))
-    if dim == 2:
-        x[:, 2] = 0.0
-        u[:, 2] = 0.0
-    u /= np.linalg.norm(u, axis=1, keepdims=True)
-    r = rng.uniform(0.35, 0.55, n)
-    half = rng.uniform(0, lmax / 2, n)
-    half[: n // 4] = 0.0  # some spheres among the rods
-    v = rng.normal(0, 1, (n, 3))
-    w = rng.normal(0, 1, (n, 3))
-    if dim == 2:
-        v[:, 2] = 0.0
-        w[:, :2] = 0.0
-    return x, u, r, half, v, w
-
-
-def reference(x, u, r, half, v, w, box, law, p):
-    """Straightforward NumPy transcription of science.md sections 2-3 (frictionless); with
-    ``NO_TENSION`` in ``law`` the normal force is clipped at zero. Also returns how many
-    contacts were clipped."""
-    n = len(x)
-    f = np.zeros((n, 3))
-    tq = np.zeros((n, 3))
-    vir = np.zeros((3, 3))
-    pe = 0.0
-    nc = clipped = 0
-    base = law & (NO_TENSION - 1)
-    for i in range(n):
-        for j in range(i + 1, n):
-            d = x[j] - x[i]
-            d -= box * np.round(d / box)
-            s, t = segment_closest(np.zeros(3), u[i], half[i], d, u[j], half[j])
-            pi_, pj_ = s * u[i], d + t * u[j]
-            gap = pj_ - pi_
-            dist = np.linalg.norm(gap)
-            rs = r[i] + r[j]
-            delta = rs - dist
-            if delta <= 0:
-                continue
-            nv = gap / dist
-            c = pi_ + (r[i] - delta / 2) * nv
-            vrel = (v[i] + np.cross(w[i], c)) - (v[j] + np.cross(w[j], c - d))
-            rate = vrel @ nv
-            if base == HOOKE:
-                fn, e = p[0] * delta, 0.5 * p[0] * delta**2
-            elif base == HERTZ:
-                fn, e = p[0] * delta**1.5, 0.4 * p[0] * delta**2.5
-            else:
-                fn, e = p[0] * delta / rs**2, 0.5 * p[0] * (delta / rs) ** 2
-            fn += p[1] * rate
-            if law & NO_TENSION and fn < 0:
-                fn = 0.0
-                clipped += 1
-            F = -fn * nv
-            f[i] += F
-            f[j] -= F
-            tq[i] += np.cross(c, F)
-            tq[j] += np.cross(c - d, -F)
-            vir += np.outer(d, F)
-            pe += e
-            nc += 1
-    return f, tq, vir, pe, nc, clipped
+from tests.pysim.helpers import random_rods, reference
 
 
 def call(x, u, r, half, v, w, box, pi, pj, law, p, friction=False, hist=None, dt=1e-4):

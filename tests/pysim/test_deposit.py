@@ -1,7 +1,6 @@
 """Deposition under gravity (science.md section 4): the random column in a box, the rain
 onto the base, the settling test, cohesion from the Bond number, and the deposit's
 analysis (apparent mass at the base, Janssen profile)."""
-import copy
 import json
 import math
 import os
@@ -18,42 +17,14 @@ from analysis.summary import analyse_deposit
 from pysim.initial import write_initial
 from pysim.io import read_particle_data
 from pysim.protocols.deposit import cohesion, grain_mass
-from tests.pysim.test_protocols import run_case
+from tests.cases import DEP, FEED, changed, deposit_with
+from tests.runs import run_case
 from rodcase.case import ConfigError, validate_case
-
-DEP = {
-    "particles": {"n": 60, "aspect_ratio": 2.0, "diameter": {"distribution": "mono", "mean": 1.0},
-                  "density": 1.0, "glued_spacing": 0.5},
-    "contact": {"law": "hertz", "k_n": 1e6, "gamma_n": 300.0, "k_t": 1e5, "gamma_t": 100.0,
-                "friction": 0.5},
-    "container": {"shape": "box", "width": 6.0},
-    "gravity": 1.0,
-    "protocol": {"name": "deposit", "dt": 1e-4, "phi_init": 0.2, "v_init": 0.5,
-                 "ke_ratio": 1e-6, "min_time": 2.0, "max_time": 60.0},
-    "output": {"thermo_every": 1000, "dump_every": 20000},
-    "seed": 5,
-}
-
-
-def changed(base: dict, **changes) -> dict:
-    """A deep copy of ``base`` with ``a__b=value`` set at ``base[a][b]``."""
-    case = copy.deepcopy(base)
-    for path, value in changes.items():
-        *head, last = path.split("__")
-        d = case
-        for k in head:
-            d = d[k]
-        d[last] = value
-    return case
-
-
-def with_(**changes):
-    return changed(DEP, **changes)
 
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_random_column_in_the_box(tmp_path, dim):
-    case = validate_case(with_(particles__dimension=dim))
+    case = validate_case(deposit_with(particles__dimension=dim))
     write_initial(case, tmp_path / "init.data")
     d = read_particle_data(tmp_path / "init.data")
     w, v = case["container"]["width"], dim - 1
@@ -71,7 +42,7 @@ def test_random_column_in_the_box(tmp_path, dim):
 
 
 def test_bond_number_sets_the_cohesive_force():
-    case = validate_case(with_(contact__bond_number=100.0, contact__cohesion_range=1e-3))
+    case = validate_case(deposit_with(contact__bond_number=100.0, contact__cohesion_range=1e-3))
     m = math.pi / 4 * 2.0 + math.pi / 6
     assert grain_mass(case) == pytest.approx(m)
     f_c, d_c = cohesion(case)
@@ -85,7 +56,7 @@ def deposits(tmp_path_factory):
     for name, changes in {"frictional": {}, "smooth_walls": {"contact__wall_friction": 0.0},
                           "cohesive": {"contact__bond_number": 100.0}}.items():
         d = tmp_path_factory.mktemp(name)
-        out[name] = (validate_case(with_(**changes)), run_case(d, with_(**changes)))
+        out[name] = (validate_case(deposit_with(**changes)), run_case(d, deposit_with(**changes)))
     return out
 
 
@@ -153,7 +124,7 @@ def test_rain_drag_caps_the_fall_speed(tmp_path):
     kinetic energy stays below that of every grain at that speed (a free-falling column
     of the same grains peaks at 283, measured); then the drag is off and the deposit
     settles, never before the rain ends."""
-    case = with_(protocol__v_init=0.0, protocol__rain_speed=1.0, protocol__rain_time=20.0)
+    case = deposit_with(protocol__v_init=0.0, protocol__rain_speed=1.0, protocol__rain_time=20.0)
     run_dir = run_case(tmp_path, case)
     meta = json.loads((run_dir / "run.json").read_text())
     assert meta["settled"] and meta["steps"] >= 200_000
@@ -165,24 +136,12 @@ def test_rain_drag_caps_the_fall_speed(tmp_path):
 
 def test_rain_needs_its_speed_and_time():
     with pytest.raises(ConfigError, match="rain_speed"):
-        validate_case(with_(protocol__rain_time=20.0))
+        validate_case(deposit_with(protocol__rain_time=20.0))
     with pytest.raises(ConfigError, match="rain_time"):
-        validate_case(with_(protocol__rain_speed=1.0))
+        validate_case(deposit_with(protocol__rain_speed=1.0))
 
 
 # -- the feed (protocol.feed, 2-D): grains enter one at a time at the top of the box ------
-FEED = {
-    "particles": {"n": 24, "dimension": 2, "aspect_ratio": 1.0,
-                  "diameter": {"distribution": "mono", "mean": 1.0}, "density": 1.0},
-    "contact": {"law": "hertz", "k_n": 1e6, "gamma_n": 300.0, "k_t": 1e5, "gamma_t": 100.0,
-                "friction": 0.5},
-    "container": {"shape": "box", "width": 8.0},
-    "gravity": 4.0,
-    "protocol": {"name": "deposit", "dt": 2e-4, "ke_ratio": 1e-6, "max_time": 60.0,
-                 "feed": {"rate": 2.0, "height": 12.0, "speed": 0.5}},
-    "output": {"thermo_every": 500, "dump_every": 2500},
-    "seed": 7,
-}
 
 
 def fed(**changes):
@@ -354,7 +313,7 @@ def test_add_particles_keeps_the_springs_and_refuses_overlaps():
 def test_fed_run_killed_and_resumed_writes_the_same_bytes(fed_run, tmp_path):
     """kill -9 in mid-feed (a checkpoint after every chunk), then --resume: the files of
     the uninterrupted run."""
-    from tests.pysim.test_checkpoint import pysim_run, start_mid_run
+    from tests.runs import pysim_run, start_mid_run
 
     _, ref = fed_run
     cp = tmp_path / "case.yaml"

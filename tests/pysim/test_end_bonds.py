@@ -124,7 +124,7 @@ def test_jammed_rods_with_end_bonds_are_force_and_torque_balanced(tmp_path):
     from analysis.balance import ForceBalance
     from analysis.contacts import ContactNumber
     from analysis.io import RunData
-    from tests.pysim.test_protocols import run_case
+    from tests.runs import run_case
 
     out = run_case(tmp_path, {
         "particles": {"n": 48, "dimension": 2, "aspect_ratio": 1.0,

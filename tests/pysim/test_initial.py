@@ -8,8 +8,7 @@ import pytest
 from pysim import initial
 from pysim.io import read_particle_data
 from pysim.neighbors import spatial_order
-from tests.pysim.test_deposit import DEP
-from tests.pysim.test_protocols import growth_case
+from tests.cases import DEP, growth_case
 from rodcase.case import validate_case
 
 

@@ -5,28 +5,10 @@ import numpy as np
 import pytest
 
 from pysim import walls
-from pysim.initial import random_spherocylinders
 from pysim.minimize import lbfgs
 from pysim.rotation import axes
 from pysim.simulation import ContactModel, Simulation
-from pysim.state import State
-
-
-def overlapping_rods(dim, n, alpha, phi, seed, spine_contact, k_n=1.0):
-    """Rods placed at random without overlap (random sequential addition at half of
-    ``phi``), then the periodic box shrunk affinely to ``phi``, well above jamming: they
-    overlap. Bidisperse radii 0.5 and 0.7, harmonic law (``k_n``)."""
-    rng = np.random.default_rng(seed)
-    r = rng.choice([0.5, 0.7], n)
-    x, u, r, length, box = random_spherocylinders(r, 2 * alpha * r, phi / 2, seed, dim)
-    if dim == 2:
-        box[2] = 1.0
-    st = State.create(x, r, length, box, axis=u, dimension=dim,
-                      periodic=(True, True, dim == 3))
-    model = ContactModel("harmonic", k_n, spine_contact=spine_contact)
-    sim = Simulation(st, model, dt=0.01, check_dt=False, max_overlap=1.0)
-    sim.rescale_box(0.5 ** (1 / dim))
-    return sim
+from tests.pysim.helpers import overlapping_rods
 
 
 @pytest.mark.parametrize("dim, spine_contact", [(2, "end_bonds"), (3, "closest")])

@@ -13,7 +13,7 @@ from pysim.initial import random_spheres, random_spherocylinders
 from pysim.jit import get_threads, set_threads
 from pysim.neighbors import all_pairs, build_list, list_is_stale
 from pysim.simulation import ContactModel, Simulation
-from tests.pysim.test_contacts import random_rods, reference
+from tests.pysim.helpers import random_rods, reference
 
 PER = np.ones(3, bool)
 

@@ -11,26 +11,7 @@ from pysim.initial import random_spheres, random_spherocylinders
 from pysim.protocols.compress import stage_plan
 from pysim.simulation import BlowUpError, ContactModel, Simulation
 from pysim.walls import plane
-
-
-def two_spheres(v0, model, dt):
-    x = np.array([[2.0, 2.5, 2.5], [3.0 + 1e-9, 2.5, 2.5]])
-    st = State.spheres(x, 0.5, np.full(3, 6.0), v=np.array([[v0, 0, 0], [-v0, 0, 0]]))
-    return Simulation(st, model, dt=dt)
-
-
-def collide(sim, nmax):
-    """Run until the spheres separate; return (contact duration, relative speed after)."""
-    t_in = None
-    for _ in range(nmax):
-        sim.run(1)
-        touching = sim.thermo().n_contacts > 0
-        if touching and t_in is None:
-            t_in = sim.state.time
-        if t_in is not None and not touching:
-            v = sim.state.v
-            return sim.state.time - t_in, v[1, 0] - v[0, 0]
-    raise AssertionError("no separation")
+from tests.pysim.helpers import clipped_restitution, collide, two_spheres
 
 
 @pytest.mark.slow
@@ -46,20 +27,6 @@ def test_linear_spring_dashpot_restitution_and_contact_time():
     tc, v_rel_after = collide(sim, 20000)
     assert v_rel_after / (2 * v0) == pytest.approx(e_theory, rel=0.01)
     assert tc == pytest.approx(tc_theory, rel=0.01)
-
-
-def clipped_restitution(k, gamma, m_eff):
-    """Restitution of the linear spring-dashpot clipped at zero force, from the equation
-    of motion ``m_eff delta'' = -max(0, k delta + gamma delta')`` (scipy): the contact
-    ends when the force reaches zero, before the overlap does."""
-    from scipy.integrate import solve_ivp
-
-    def force_zero(t, y):
-        return k * y[0] + gamma * y[1] if t > 0 else 1.0
-    force_zero.terminal, force_zero.direction = True, -1
-    sol = solve_ivp(lambda t, y: [y[1], -(k * y[0] + gamma * y[1]) / m_eff], (0, 1.0),
-                    [0.0, 1.0], events=force_zero, rtol=1e-12, atol=1e-14)
-    return -sol.y_events[0][0][1]
 
 
 @pytest.mark.parametrize("gamma, gain", [(30.0, 0.01), (200.0, 0.15)])

@@ -10,27 +10,8 @@ import yaml
 from analysis.io import RunData
 from pysim.initial import write_initial
 from rodcase.case import validate_case
-
-
-def run_case(tmp_path, case, *extra):
-    case = validate_case(case)
-    cp = tmp_path / "case.yaml"
-    cp.write_text(yaml.safe_dump(case))
-    write_initial(case, tmp_path / "init.data")
-    r = subprocess.run([sys.executable, "-m", "pysim", "run", str(cp), "--data",
-                        str(tmp_path / "init.data"), "--out", str(tmp_path / "out"),
-                        "--no-progress", *extra], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
-    return tmp_path / "out"
-
-
-def growth_case(n, seed, alpha=0.0, **protocol):
-    """A growth case of frictionless hooke particles (the random-packing study's law)."""
-    return {"particles": {"n": n, "aspect_ratio": alpha, "diameter": {"mean": 1.0}},
-            "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 10.0, "gamma_bg": 0.1},
-            "protocol": {"name": "growth", "phi_init": 0.3, "rate": 0.1, "dt": 1e-4,
-                         **protocol},
-            "output": {"thermo_every": 1000, "dump_every": 5000}, "seed": seed}
+from tests.cases import growth_case
+from tests.runs import run_case
 
 
 def read_cycles(path):

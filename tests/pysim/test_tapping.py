@@ -9,23 +9,10 @@ from analysis.io import RunData
 from analysis.summary import analyse_tapping
 from pysim.protocols.tapping import plan, settle_drag
 from pysim.simulation import ContactModel
-from tests.pysim.test_physics import collide, two_spheres
-from tests.pysim.test_protocols import run_case
+from tests.cases import TAP, TAP_D as D
+from tests.pysim.helpers import collide, two_spheres
+from tests.runs import run_case
 from rodcase.case import restitution_law, validate_case
-
-D = 0.523e-3
-TAP = {
-    "particles": {"n": 30, "aspect_ratio": 2.0, "diameter": {"distribution": "mono", "mean": D},
-                  "density": 2500.0, "glued_spacing": 0.5},
-    "contact": {"law": "hooke", "restitution": 0.4, "contact_time": 6e-4, "friction": 0.5},
-    "container": {"shape": "cylinder", "diameter": 8 * D},
-    "gravity": 9.81,
-    "protocol": {"name": "tapping", "dt": 2e-5, "phi_init": 0.15, "settle_time": 0.1,
-                 "relax_time": 0.05, "frequency": 30.0, "intensity": 2.0, "taps": 2,
-                 "frames_per_tap": 4},
-    "output": {"thermo_every": 250},
-    "seed": 3,
-}
 
 
 @pytest.mark.parametrize("e_n", [0.1, 0.4, 0.9])

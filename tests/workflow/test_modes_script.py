@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from pysim import io
-from tests.pysim.test_minimize import overlapping_rods
+from tests.pysim.helpers import overlapping_rods
 from rodcase.case import validate_case
 from workflows.scripts import modes
 

@@ -4,12 +4,13 @@ import numpy as np
 import pytest
 
 from analysis.summary import analyse_deposit
-from tests.pysim.test_deposit import run_case, with_
+from tests.cases import deposit_with
+from tests.runs import run_case
 from workflows.scripts import plot_deposit
 
 
 def test_deposit_figure_from_a_settled_run(tmp_path, monkeypatch):
-    rd = run_case(tmp_path, with_())
+    rd = run_case(tmp_path, deposit_with())
     _, prof = analyse_deposit(rd, width=6.0, gravity=1.0, slab=3.0, base_wall_id=-5)
     prof.to_csv(rd / "curves.csv", index=False)
     seen = {}

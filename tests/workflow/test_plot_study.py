@@ -5,7 +5,7 @@ import pytest
 from analysis.contacts import ContactNumber
 from analysis.io import RunData
 from analysis.packing import packing_fraction
-from tests.pysim.test_protocols import run_case
+from tests.runs import run_case
 from workflows.scripts.plot_study import contacts_at_jamming
 
 

@@ -9,7 +9,7 @@ import pytest
 import yaml
 
 from analysis.plots import _seed_groups
-from tests.pysim.test_tapping import TAP
+from tests.cases import TAP
 from workflows.scripts.plot_tapping import main, sets_table
 
 #: per (variant, seed): late density and angle of the synthetic runs

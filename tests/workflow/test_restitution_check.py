@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from tests.pysim.test_tapping import TAP
+from tests.cases import TAP
 from workflows import restitution_check as rc
 from rodcase.case import deep_merge, restitution_law, validate_case
 from workflows.engines import EngineError, venv_bin
@@ -87,7 +87,7 @@ def test_clipped_restitution_solves_the_clipped_equation_of_motion(zeta):
     """The closed form of :func:`linear_restitution` with ``clipped`` against scipy's
     solution of ``m delta'' = -max(0, k delta + gamma delta')``, over- and underdamped;
     it is never below the unclipped value."""
-    from tests.pysim.test_physics import clipped_restitution
+    from tests.pysim.helpers import clipped_restitution
 
     k, m_eff = 19.5, 1.7e-6
     gamma = 2 * zeta * math.sqrt(m_eff * k)

@@ -9,6 +9,7 @@ import pytest
 import yaml
 
 from rodcase.case import ConfigError, validate_case
+from tests.cases import DEP, FEED, TAP, changed
 from workflows.studies import load_config, validate_config
 
 GOOD_CASE = {
@@ -103,25 +104,7 @@ def test_cli_bad_case_exit_2_no_traceback_no_output(tmp_path):
     assert not out.exists()
 
 
-def changed(base: dict, **changes) -> dict:
-    """A deep copy of ``base`` with ``a__b=value`` set at ``base[a][b]`` (``KeyError``:
-    the key removed)."""
-    case = copy.deepcopy(base)
-    for path, value in changes.items():
-        *head, last = path.split("__")
-        d = case
-        for k in head:
-            d = d[k]
-        if value is KeyError:
-            del d[last]
-        else:
-            d[last] = value
-    return case
-
-
 def tap_case(**changes):
-    from tests.pysim.test_tapping import TAP
-
     return changed(TAP, **changes)
 
 
@@ -177,8 +160,6 @@ def test_container_only_for_tapping():
 
 
 def dep_case(**changes):
-    from tests.pysim.test_deposit import DEP
-
     return changed(DEP, **changes)
 
 
@@ -319,8 +300,6 @@ def test_wall_friction_alone_gets_the_derived_tangential_spring():
 
 
 def feed_case(**changes):
-    from tests.pysim.test_deposit import FEED
-
     return changed(FEED, **changes)
 
 

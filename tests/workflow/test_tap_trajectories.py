@@ -6,7 +6,7 @@ import pytest
 
 from pysim.initial import write_initial
 from pysim.io import read_particle_data
-from tests.pysim.test_tapping import TAP
+from tests.cases import TAP
 from rodcase.case import validate_case
 from workflows.scripts import tap_trajectories as tt
 

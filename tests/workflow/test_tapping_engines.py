@@ -12,7 +12,7 @@ from analysis.io import RunData
 from analysis.summary import analyse_tapping
 from pysim.initial import write_initial
 from pysim.protocols.tapping import plan
-from tests.pysim.test_tapping import TAP, D
+from tests.cases import TAP, TAP_D as D
 from workflows import engines
 from rodcase.case import validate_case
 
