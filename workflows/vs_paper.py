@@ -89,14 +89,17 @@ def reference_rows(case: dict, references, kind: str = "value", free=()) -> pd.D
 
 #: per-state columns of a study's ``modes.csv`` (workflows/scripts/modes.py) that
 #: reference rows name as observables
-MODE_OBSERVABLES = ("mode_fraction_low", "mode_fraction_middle", "mode_fraction_high")
+MODE_OBSERVABLES = ("mode_fraction_low", "mode_fraction_middle", "mode_fraction_high",
+                    "omega_below_gap_exponent", "omega_low_exponent", "omega_middle_exponent")
 
 
 def mode_rows(study: str, path: Path) -> pd.DataFrame:
-    """The band fractions of a study's ``modes.csv`` (one row per pysim stable state) as
-    ``summary.csv`` rows, without an uncertainty (each is one state's count)."""
+    """The band fractions and frequency exponents of a study's ``modes.csv`` (one row per
+    pysim stable state) as ``summary.csv`` rows, without an uncertainty (one state each;
+    the seeds give the spread)."""
     modes = pd.read_csv(path)
-    long = modes.melt(id_vars=["variant", "seed"], value_vars=list(MODE_OBSERVABLES),
+    long = modes.melt(id_vars=["variant", "seed"],
+                      value_vars=[c for c in MODE_OBSERVABLES if c in modes],
                       var_name="observable", value_name="value")
     return pd.DataFrame({"study": study, "case": long["variant"], "engine": "pysim",
                          "seed": long["seed"].str.removeprefix("seed").astype(int),

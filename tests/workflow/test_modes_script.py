@@ -59,7 +59,7 @@ def test_modes_of_a_relaxed_rod_packing(tmp_path):
     np.testing.assert_allclose(fractions, 1.0, atol=1e-9)
     out = tmp_path / "figures" / "modes.png"
     assert modes.main(["--runs", str(run), "--out", str(out),
-                       "--table", str(tmp_path / "modes.csv")]) == 0
+                       "--table", str(tmp_path / "modes.csv"), "--energies"]) == 0
     assert out.stat().st_size > 10_000
     rows = pd.read_csv(tmp_path / "modes.csv")
     assert list(rows.variant) == ["alpha1"] and rows.n_dof.iloc[0] == summary["n_dof"]
@@ -79,6 +79,28 @@ def test_the_papers_coordinates_and_the_masses_share_zero_and_negative_modes(tmp
     assert not np.allclose(paper.omega2, mass.omega2)
     with pytest.raises(ValueError, match="metric 'inertia' is not one of paper, mass"):
         modes.stable_state_modes(run, "inertia")
+
+
+def test_a_compression_reaches_the_energy_asked_for(tmp_path):
+    run = fake_jammed_run(tmp_path)
+    _, start = modes.stable_state_modes(run)
+    target = 4.0 * start["energy_density"]
+    case, sim, step = modes.compressed_state(run, target, rtol=0.1)
+    _, above = modes.modes_of(sim, case, step)
+    assert abs(above["energy_density"] / target - 1) <= 0.1
+    assert above["phi"] > start["phi"] and above["negative_modes"] == 0
+    with pytest.raises(ValueError, match="no compression reached U/L\\^2 = "):
+        modes.compressed_state(run, target, rtol=1e-9, tries=1)
+
+
+def test_frequency_exponents_are_log_log_slopes():
+    u = np.array([1e-15, 1e-14, 1e-12])
+    steps = pd.DataFrame({"energy_density": u, "omega_below_gap": 3.0 * u**0.25,
+                          "omega_low": 0.1 * u**0.5, "omega_middle": 2.0 * u**0.25})
+    x = modes.frequency_exponents(steps)
+    assert x["omega_below_gap_exponent"] == pytest.approx(0.25, rel=1e-9)
+    assert x["omega_low_exponent"] == pytest.approx(0.5, rel=1e-9)
+    assert x["omega_middle_exponent"] == pytest.approx(0.25, rel=1e-9)
 
 
 def test_modes_read_the_full_precision_state_when_there_is_one(tmp_path):

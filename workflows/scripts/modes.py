@@ -54,20 +54,10 @@ def _zero(w2: np.ndarray, top: float) -> np.ndarray:
 METRICS = ("paper", "mass")
 
 
-def stable_state_modes(run_dir: Path, metric: str = "paper") -> tuple[pd.DataFrame, dict]:
-    """Modes of the final frame of a ``jammed`` pysim run: a per-mode table (``omega``,
-    ``omega2``, ``pr``, the rotational / parallel / perpendicular fractions, and
-    ``omega_k`` of the stiffness part alone; each ascending) and a summary (particles
-    and degrees of freedom of the backbone, contact pairs, zero modes of ``H`` and of
-    ``H_k``, negative modes of ``H``, the backbone's ``bonds`` (a side contact twice,
-    :func:`analysis.contacts.end_bond_counts`) beside the ``modes_above_gap`` (above the
-    widest gap of the spectrum: the paper finds one per bond at jamming), the fractions of
-    all modes in the three bands split at the two widest gaps (``mode_fraction_low``,
-    ``_middle``, ``_high``: the paper's bands at alpha >= 1), the largest stress-part
-    entry relative to the stiffness part's, the relaxed ``U/L^2`` and residuals, and ``exact``: whether the
-    full-precision state was read). ``metric`` is one of :data:`METRICS`."""
-    if metric not in METRICS:
-        raise ValueError(f"metric {metric!r} is not one of {', '.join(METRICS)}")
+def load_stable_state(run_dir: Path):
+    """``(case, sim, step, exact)`` of the final state of a 2-D harmonic ``jammed`` pysim
+    run, not yet relaxed again: from ``stable_state.npz`` at full precision where the run
+    kept it (``exact``), else from the 10-digit final frame."""
     from pysim import checkpoint
     from pysim.protocols import jammed
     from pysim.protocols.compress import simulation_from_case
@@ -83,17 +73,82 @@ def stable_state_modes(run_dir: Path, metric: str = "paper") -> tuple[pd.DataFra
     exact = run_dir / jammed.STABLE_STATE
     if exact.exists():
         sim = checkpoint.load(exact)[0]
-        step = sim.state.step
-    else:  # runs before the full-precision state was kept: the 10-digit final frame
-        frame, _ = RunData(run_dir).frames()[-1]
-        init = {"x": frame.x, "box": frame.box.copy(), "box_lo": frame.box_lo,
-                "axis": frame.axis, "radius": frame.radius, "length": frame.length}
-        sim = simulation_from_case(case, init, check_dt=False)
-        step = frame.step
+        return case, sim, sim.state.step, True
+    # runs before the full-precision state was kept: the 10-digit final frame
+    frame, _ = RunData(run_dir).frames()[-1]
+    init = {"x": frame.x, "box": frame.box.copy(), "box_lo": frame.box_lo,
+            "axis": frame.axis, "radius": frame.radius, "length": frame.length}
+    return case, simulation_from_case(case, init, check_dt=False), frame.step, False
+
+
+def _relax(sim, case) -> None:
+    from pysim.protocols import jammed
+
+    d_min = float(2 * sim.state.radius.min())
+    jammed.relax(sim, case["protocol"]["force_tol"] * case["contact"]["k_n"] / d_min,
+                 case["protocol"]["max_relax"])
+
+
+def stable_state_modes(run_dir: Path, metric: str = "paper") -> tuple[pd.DataFrame, dict]:
+    """Modes of the final frame of a ``jammed`` pysim run, relaxed again at its box
+    (:func:`modes_of`)."""
+    case, sim, step, exact = load_stable_state(run_dir)
+    _relax(sim, case)
+    table, summary = modes_of(sim, case, step, metric)
+    return table, {**summary, "exact": exact}
+
+
+def compressed_state(run_dir: Path, target: float, rtol: float = 0.25, tries: int = 8):
+    """The stable state of ``run_dir`` compressed affinely above jamming and relaxed,
+    until its ``U/L^2`` lies within ``rtol`` of ``target``: ``(case, sim, step)``. Each
+    trial starts again from the stable state (one basin); the strains follow by the
+    secant rule on ``sqrt(U)``, linear in ``phi - phi_J`` for the harmonic law.
+    ``ValueError`` after ``tries`` trials."""
+    from pysim.protocols import jammed
+
+    def trial(strain):  # strain: relative increase of phi
+        case, sim, step, _ = load_stable_state(run_dir)
+        if strain > 0:
+            sim.rescale_box((1.0 + strain) ** (-1.0 / sim.state.dimension))
+        _relax(sim, case)
+        return case, sim, step, jammed.energy_density(sim, float(2 * sim.state.radius.min()))
+
+    points = [(0.0, np.sqrt(trial(0.0)[3]))]
+    strain, energy = 1e-6, None
+    for _ in range(tries):
+        case, sim, step, energy = trial(strain)
+        if abs(energy / target - 1.0) <= rtol:
+            return case, sim, step
+        points.append((strain, np.sqrt(energy)))
+        (s_a, r_a), (s_b, r_b) = points[-2], points[-1]
+        slope = (r_b - r_a) / (s_b - s_a)
+        nxt = s_b + (np.sqrt(target) - r_b) / slope if slope > 0 else 10.0 * s_b
+        strain = nxt if nxt > 0 else 0.1 * s_b
+    raise ValueError(f"{run_dir}: no compression reached U/L^2 = {target:g} within "
+                     f"{rtol:.0%} in {tries} tries (last {energy:.3g})")
+
+
+def modes_of(sim, case: dict, step: int, metric: str = "paper") -> tuple[pd.DataFrame, dict]:
+    """Modes of a relaxed 2-D packing: a per-mode table (``omega``, ``omega2``, ``pr``,
+    the rotational / parallel / perpendicular fractions, and ``omega_k`` of the stiffness
+    part alone; each ascending) and a summary (particles and degrees of freedom of the
+    backbone, contact pairs, zero modes of ``H`` and of ``H_k``, negative modes of ``H``,
+    the backbone's ``bonds`` (a side contact twice,
+    :func:`analysis.contacts.end_bond_counts`) beside the ``modes_above_gap`` (above the
+    widest gap of the spectrum: the paper finds one per bond at jamming) and the mean
+    frequency below it (``omega_below_gap``), the fractions of all modes in the three
+    bands split at the two widest gaps (``mode_fraction_low``, ``_middle``, ``_high``:
+    the paper's bands at alpha >= 1) and the mean frequencies of the lower two
+    (``omega_low``, ``omega_middle``), the largest stress-part entry relative to the
+    stiffness part's, ``U/L^2``, ``phi`` and the residuals). ``metric`` is one of
+    :data:`METRICS`."""
+    if metric not in METRICS:
+        raise ValueError(f"metric {metric!r} is not one of {', '.join(METRICS)}")
+    from pysim.protocols import jammed
+
     state = sim.state
     d_min = float(2 * state.radius.min())
     k_n = case["contact"]["k_n"]
-    jammed.relax(sim, case["protocol"]["force_tol"] * k_n / d_min, case["protocol"]["max_relax"])
     res = jammed.residuals(sim)
     fr, ct = _frame_contacts(sim, step)
     keep = ~remove_rattlers_2d(fr, ct)
@@ -112,9 +167,10 @@ def stable_state_modes(run_dir: Path, metric: str = "paper") -> tuple[pd.DataFra
     table = pd.DataFrame(am.mode_table(w2, vecs, dof, fr.axis))
     table["omega_k"] = np.sign(wk2) * np.sqrt(np.abs(wk2))
     top = float(np.abs(w2).max())
-    backbone = keep[fr.index_of(ct.i)] & keep[fr.index_of(ct.j)]
+    backbone = keep[a] & keep[b]
     bonds = (end_bond_counts(fr, ct.subset(backbone)).sum() if end_bonds
              else int(backbone.sum()))
+    omega = np.sqrt(np.abs(w2))
     two = am.bands(w2, 2, ZERO * top)
     three = am.bands(w2, 3, ZERO * top)
     summary = {"n_particles": int(keep.sum()), "n_dof": len(dof), "n_pairs": len(pairs),
@@ -123,12 +179,29 @@ def stable_state_modes(run_dir: Path, metric: str = "paper") -> tuple[pd.DataFra
                "negative_modes": int(np.sum(w2 < -ZERO * top)),
                # the paper's count: N z/2 modes above the gap, one per bond
                "bonds": int(bonds), "modes_above_gap": int(np.sum(two == 1)),
+               "omega_below_gap": float(omega[two == 0].mean()),
                **{f"mode_fraction_{name}": float(np.mean(three == k))
                   for k, name in enumerate(("low", "middle", "high"))},
+               "omega_low": float(omega[three == 0].mean()),
+               "omega_middle": float(omega[three == 1].mean()),
                "stress_over_stiffness": float(np.abs(hs).max() / np.abs(hk).max()),
-               "energy_density": jammed.energy_density(sim, d_min), "metric": metric,
-               "exact": exact.exists(), **res}
+               "energy_density": jammed.energy_density(sim, d_min),
+               "phi": state.packing_fraction(), "metric": metric, **res}
     return table, summary
+
+
+#: U/L^2 of the states above jamming for the scaling of the band frequencies (beside
+#: the stable state's, near 1e-15): within the paper's ranges (Figs. 14, 18, 20)
+ENERGIES = (1e-14, 1e-12)
+
+
+def frequency_exponents(steps: pd.DataFrame) -> dict:
+    """Exponents ``x`` of ``omega_band ~ (U/L^2)^x`` by least squares in log-log over a
+    state and its compressions (rows of :func:`modes_of` summaries):
+    ``omega_below_gap_exponent``, ``omega_low_exponent``, ``omega_middle_exponent``."""
+    log_u = np.log(steps["energy_density"].to_numpy())
+    return {f"{col}_exponent": float(np.polyfit(log_u, np.log(steps[col].to_numpy()), 1)[0])
+            for col in ("omega_below_gap", "omega_low", "omega_middle")}
 
 
 def plot_modes(tables: dict, out: Path) -> None:
@@ -189,10 +262,13 @@ def main(argv=None) -> int:
     ap.add_argument("--metric", choices=METRICS, default="paper",
                     help="dynamical matrix: the paper's Hessian in (x, y, A theta) "
                          "(default) or mass-weighted")
+    ap.add_argument("--energies", nargs="*", type=float, default=list(ENERGIES),
+                    help="U/L^2 of states compressed above each stable state, for the "
+                         "scaling of the band frequencies (default %(default)s; none to skip)")
     a = ap.parse_args(argv)
     from tqdm import tqdm
 
-    rows, per_mode, tables = [], [], {}
+    rows, per_mode, tables, ladder = [], [], {}, []
     for run in tqdm(a.runs, desc="modes", unit="state"):
         record = json.loads((run / "run.json").read_text())
         if record.get("status") != "ok" or not record.get("converged", False):
@@ -202,6 +278,13 @@ def main(argv=None) -> int:
             continue
         table, summary = stable_state_modes(run, a.metric)
         variant, seed = run.parent.parent.name, run.parent.name
+        steps = [summary]
+        for target in a.energies:
+            case, sim, step = compressed_state(run, target)
+            steps.append(modes_of(sim, case, step, a.metric)[1])
+        ladder += [{"variant": variant, "seed": seed, **r} for r in steps]
+        if len(steps) > 2:
+            summary.update(frequency_exponents(pd.DataFrame(steps)))
         rows.append({"variant": variant, "seed": seed, **summary})
         per_mode.append(table.assign(variant=variant, seed=seed))
         tables.setdefault(variant, []).append(table)
@@ -211,6 +294,11 @@ def main(argv=None) -> int:
     tmp = a.table.with_name(a.table.name + ".tmp")
     pd.DataFrame(rows).to_csv(tmp, index=False)
     tmp.replace(a.table)
+    if ladder:
+        path = a.table.with_name(a.table.stem + ".energies.csv")
+        tmp = path.with_name(path.name + ".tmp")
+        pd.DataFrame(ladder).to_csv(tmp, index=False)
+        tmp.replace(path)
     modes_path = a.table.with_name(a.table.stem + ".modes.csv.gz")
     tmp = modes_path.with_name(modes_path.name + ".tmp")
     pd.concat(per_mode).to_csv(tmp, index=False, compression="gzip")
