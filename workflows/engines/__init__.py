@@ -16,7 +16,7 @@ adapter in a work directory. A run that fails, hangs past its budget or loses at
 This package keeps the names its callers use; they live in the modules named above.
 """
 from workflows.engines.common import (INPUTS, PROJECT_ROOT, SHAPES, EngineError, glued_spheres,
-                                      kind, shape, venv_bin)
+                                      shape, venv_bin)
 from workflows.engines.data import RHO_2D, write_body_data, write_glued_data
 from workflows.engines.driver import (ERROR_HINTS, JOB_STEP_PREFIXES, command, engine_env,
                                       engine_version, failure_message, run)

@@ -30,14 +30,6 @@ def shape(case: dict) -> str:
     return "rods" if rod else "spheres"
 
 
-def kind(case: dict) -> str:
-    """``spheres`` (3-D, ``L = 0``), ``rods`` (3-D spherocylinders) or ``2d``."""
-    p = case["particles"]
-    if p.get("dimension", 3) == 2:
-        return "2d"
-    return "rods" if p.get("aspect_ratio", 0.0) > 0 else "spheres"
-
-
 def as_vars(values: dict) -> dict[str, str]:
     """``-var`` strings of deck values: floats by ``repr`` (every digit), the rest by
     ``str``."""
