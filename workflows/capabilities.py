@@ -1,8 +1,9 @@
 """Which engine runs what: the matrix engine x shape x friction x protocol, computed with
-:func:`workflows.engines.supports` on the cases the project ships (every profile's
-cases, each also with friction switched on or off and, where it stays a valid case,
-with spheres made rods or rods made spheres), so that the matrix cannot drift from the
-code. ``make doctor`` prints it; ``docs/engines.md`` carries it."""
+:func:`workflows.engines.supports` (the adapter table, :mod:`workflows.engines.table`) on
+the cases the project ships (every profile's cases, each also with friction switched on
+or off and, where it stays a valid case, with spheres made rods or rods made spheres), so
+that the matrix cannot drift from the code. Its engines, protocols and shapes are the
+table's. ``make doctor`` prints it; ``docs/operations.md`` carries it."""
 from __future__ import annotations
 
 import argparse
@@ -10,20 +11,9 @@ import sys
 from pathlib import Path
 
 from rodcase.case import ConfigError, case_hash, deep_merge, validate_case
+from workflows.engines.table import ADAPTERS, ENGINES, PROTOCOLS, SHAPES, shape, supports
 
-ENGINES = ("pysim", "lammps", "lammps-body", "liggghts")
-PROTOCOLS = ("compress", "growth", "jammed", "tapping", "deposit")
-#: the column order: shape (3-D spheres, 3-D rods, 2-D disks, 2-D rods), then friction
-SHAPES = ("spheres", "rods", "disks 2-D", "rods 2-D")
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def shape(case: dict) -> str:
-    """The case's shape column: spheres, rods, disks 2-D or rods 2-D."""
-    rod = case["particles"].get("aspect_ratio", 0.0) > 0
-    if case["particles"].get("dimension", 3) == 2:
-        return "rods 2-D" if rod else "disks 2-D"
-    return "rods" if rod else "spheres"
 
 
 def shipped_cases() -> list[dict]:
@@ -63,8 +53,6 @@ def matrix(cases=None) -> dict[tuple[str, str, str, bool], str]:
     every case of that cell, ``no`` when none, ``some`` otherwise (the cell's cases differ
     in something else its rules look at, such as the contact law); cells without a case
     are absent."""
-    from workflows.engines import supports
-
     seen: dict[tuple, set[bool]] = {}
     for base in shipped_cases() if cases is None else cases:
         for case in _variants(base):
@@ -76,17 +64,18 @@ def matrix(cases=None) -> dict[tuple[str, str, str, bool], str]:
 
 
 def markdown(cells: dict) -> str:
-    """The matrix as a Markdown table: a row per engine and protocol, a column per shape
-    and friction (``-`` where no shipped case exists)."""
+    """The matrix as a Markdown table: a row per engine and protocol that the adapter
+    table has, a column per shape (:data:`SHAPES`) and friction (``-`` where no shipped
+    case exists)."""
     cols = [(s, f) for s in SHAPES for f in (False, True)]
     head = "| engine | protocol | " + " | ".join(
         f"{s}{', friction' if f else ''}" for s, f in cols) + " |"
     lines = [head, "|" + "---|" * (len(cols) + 2)]
     for engine in ENGINES:
         for protocol in PROTOCOLS:
+            if not any((engine, s, protocol) in ADAPTERS for s in SHAPES):
+                continue  # an engine's protocol it has no deck for: one line fewer
             row = [cells.get((engine, protocol, s, f), "-") for s, f in cols]
-            if set(row) <= {"-", "no"} and engine != "pysim":
-                continue  # an engine's protocol it never runs: one line fewer
             lines.append(f"| {engine} | {protocol} | " + " | ".join(row) + " |")
     return "\n".join(lines)
 

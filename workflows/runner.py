@@ -25,7 +25,6 @@ import json
 import os
 import shutil
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -49,8 +48,7 @@ class RunFailure(RuntimeError):
 def _pysim(case_path: Path, data: Path, out: Path, threads: int, timeout: float) -> dict:
     import pysim
 
-    cmd = [sys.executable, "-m", "pysim", "run", str(case_path), "--data", str(data), "--out",
-           str(out), "--no-progress", "--threads", str(threads)]
+    cmd = engines.pysim.command(case_path, data, out, threads)
     # resume only a checkpoint of this very case and start (a changed case starts over)
     stamp = engines.resume_stamp("pysim", load_case(case_path), data)
     stamp_path = out / "resume.json"

@@ -91,15 +91,17 @@ def test_lammps_2d_body_rods_against_pysim(tmp_path, pysim_reference):
 
 
 def test_lammps_body_refuses_what_it_has_no_deck_for():
-    assert "disks run on 'lammps'" in engines.supports(
-        "lammps-body", validate_case({**CASE, "particles": {**CASE["particles"],
-                                                           "aspect_ratio": 0.0}}))
+    disks = engines.supports("lammps-body", validate_case(
+        {**CASE, "particles": {**CASE["particles"], "aspect_ratio": 0.0}}))
+    assert "lammps-body has no deck for disks 2-D under protocol 'compress'" in disks
+    assert "engines that run disks 2-D under 'compress': pysim, lammps)" in disks
     jammed = {**CASE, "protocol": {"name": "jammed", "phi_init": 0.4, "rate": 1e-3,
                                    "dt": 0.01}}
-    assert "'compress' protocol only" in engines.supports("lammps-body", validate_case(jammed))
+    assert ("no deck for rods 2-D under protocol 'jammed' (it runs compress (rods, rods 2-D);"
+            in engines.supports("lammps-body", validate_case(jammed)))
 
 
 def test_lammps_2d_deck_refuses_other_laws():
     case = validate_case({**CASE, "contact": {"law": "hooke", "k_n": 1.0}})
     assert "soft harmonic law only" in engines.supports("lammps", case)
-    assert "no 2-D deck" in engines.supports("liggghts", validate_case(CASE))
+    assert "liggghts has no deck for rods 2-D" in engines.supports("liggghts", validate_case(CASE))

@@ -45,4 +45,6 @@ def test_3d_body_deck_refuses_friction_and_other_laws():
                                                        "k_t": 2.0e4}})
     assert "frictionless linear law only" in engines.supports("lammps-body", with_friction)
     spheres = validate_case({**CASE, "particles": {**CASE["particles"], "aspect_ratio": 0.0}})
-    assert "spheres and disks run on 'lammps'" in engines.supports("lammps-body", spheres)
+    assert ("no deck for spheres under protocol 'compress' (it runs compress (rods, rods 2-D); "
+            "engines that run spheres under 'compress': pysim, lammps, liggghts)"
+            in engines.supports("lammps-body", spheres))

@@ -6,6 +6,7 @@ import time
 import pytest
 
 from workflows import engines
+from workflows.engines import restarts
 
 
 def test_prune_keeps_the_newest_restart_files_by_step(tmp_path):
@@ -24,7 +25,7 @@ def test_restart_files_are_pruned_while_the_engine_runs(tmp_path, monkeypatch):
     """A stand-in engine writes 30 restart files, one every 0.05 s, and reports how many
     it saw at most: with pruning every 0.2 s there are never more than a handful, and
     the newest KEEP_RESTARTS are left at the end."""
-    monkeypatch.setattr(engines, "PRUNE_SECONDS", 0.2)
+    monkeypatch.setattr(restarts, "PRUNE_SECONDS", 0.2)
     code = ("import pathlib, time\n"
             "most = 0\n"
             "for k in range(1, 31):\n"
@@ -33,7 +34,7 @@ def test_restart_files_are_pruned_while_the_engine_runs(tmp_path, monkeypatch):
             "    time.sleep(0.05)\n"
             "print('most', most)\n")
     with open(tmp_path / "screen.txt", "w") as screen:
-        proc = engines._run_pruning([sys.executable, "-c", code], screen, tmp_path, None, 60.0)
+        proc = restarts._run_pruning([sys.executable, "-c", code], screen, tmp_path, None, 60.0)
     assert proc is not None and proc.returncode == 0
     most = int((tmp_path / "screen.txt").read_text().split()[-1])
     assert most <= engines.KEEP_RESTARTS + 6  # one pruning interval of new files
@@ -44,7 +45,7 @@ def test_restart_files_are_pruned_while_the_engine_runs(tmp_path, monkeypatch):
 def test_an_engine_past_its_budget_is_stopped(tmp_path):
     t0 = time.perf_counter()
     with open(tmp_path / "screen.txt", "w") as screen:
-        proc = engines._run_pruning([sys.executable, "-c", "import time; time.sleep(60)"],
+        proc = restarts._run_pruning([sys.executable, "-c", "import time; time.sleep(60)"],
                                     screen, tmp_path, None, 0.5)
     assert proc is None
     assert time.perf_counter() - t0 < 10

@@ -53,7 +53,8 @@ def test_case_maps_to_the_deck():
     assert float(engines.liggghts_deposit_vars(coh)["f_coh"]) == pytest.approx(cohesion(coh)[0])
     # what the deck cannot do is said
     spheres = validate_case(deposit_with(particles__aspect_ratio=0.0))
-    assert "3-D rods" in engines.supports("liggghts", spheres)
+    assert "liggghts has no deck for spheres under protocol 'deposit'" in engines.supports(
+        "liggghts", spheres)
     hooke = validate_case(deposit_with(contact__law="hooke"))
     assert "Hertz" in engines.supports("liggghts", hooke)
     narrow = deposit_with(particles__aspect_ratio=5.0)  # validate_case refuses it already

@@ -9,6 +9,7 @@ import math
 import shutil
 import subprocess
 import sys
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -32,6 +33,15 @@ def with_(**changes):
         section, name = key.split("__")
         case[section][name] = value
     return case
+
+
+#: the adapter of LIGGGHTS' tapping deck (workflows.engines.table)
+TAP_KEY = ("liggghts", "rods", "tapping")
+
+
+def with_base_dump(tap):
+    """The tapping deck's -var values with the moved base written at every frame."""
+    return lambda c: {**tap.variables(c), "base_dump": "1"}
 
 
 def observables(case, run_dir):
@@ -64,15 +74,15 @@ def tapped(tmp_path_factory):
     d = tmp_path_factory.mktemp("ligtap")
     case = validate_case(TAP)
     write_initial(case, d / "init.data")
-    plain, convert = engines.liggghts_tap_vars, engines.convert_liggghts_tap
+    tap = engines.ADAPTERS[TAP_KEY]
 
-    def keep_spheres(work, c):  # the sphere dump, before it becomes rods
+    def keep_spheres(work, c, data):  # the sphere dump, before it becomes rods
         shutil.copy(work / "particles.dump", work / "spheres.dump")
-        return convert(work, c)
+        return tap.convert(work, c, data)
 
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(engines, "liggghts_tap_vars", lambda c: {**plain(c), "base_dump": "1"})
-        mp.setattr(engines, "convert_liggghts_tap", keep_spheres)
+        mp.setitem(engines.ADAPTERS, TAP_KEY, replace(tap, variables=with_base_dump(tap),
+                                                      convert=keep_spheres))
         summary = engines.run("liggghts", case, d / "init.data", d / "run", timeout=300)
     return case, d, summary
 
@@ -253,9 +263,9 @@ def test_liggghts_tapping_resumes_mid_tap(tmp_path):
     (work / f"restart.{cut_at}").write_bytes(newest[: len(newest) * 2 // 3])
     assert not engines.liggghts_restart_is_complete(work / f"restart.{cut_at}")
 
-    plain = engines.liggghts_tap_vars
+    tap = engines.ADAPTERS[TAP_KEY]
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(engines, "liggghts_tap_vars", lambda c: {**plain(c), "base_dump": "1"})
+        mp.setitem(engines.ADAPTERS, TAP_KEY, replace(tap, variables=with_base_dump(tap)))
         summary = engines.run("liggghts", case, tmp_path / "init.data", out, timeout=300)
     assert summary["resumed_from"].endswith(f"restart.{restarts[-1]}")
     run = RunData(out)

@@ -14,6 +14,7 @@ from pysim.initial import write_initial
 from tests.conftest import needs_liggghts
 from tests.cases import DEP_SMALL, ENGINE_COMPRESS, SETTLE_RODS, TAP
 from workflows import engines
+from workflows.engines.convert import _iter_local
 from rodcase.case import deep_merge, validate_case
 
 
@@ -21,7 +22,7 @@ def normal_forces(native, engine: str) -> np.ndarray:
     """Normal force of every sphere pair in every frame of an engine's contact dump: the
     force on ``i`` projected on ``x_i - x_j`` (positive: the pair pushes apart)."""
     out = []
-    for _step, box, cols, t in engines._iter_local(native):
+    for _step, box, cols, t in _iter_local(native):
         c = {name: k for k, name in enumerate(cols)}
         flags = box[0].split()[3:]  # ITEM: BOX BOUNDS xx yy zz
         bounds = np.array([[float(v) for v in ln.split()[:2]] for ln in box[1:4]])
