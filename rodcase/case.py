@@ -313,7 +313,7 @@ def _check_case(case: dict, source: str, at: str):
                 f"{source}: {at}protocol.phi_fast = {pr['phi_fast']} must lie between phi_init "
                 f"= {pr['phi_init']} and phi_final = {pr['phi_final']}")
         settle = pr.get("settle")
-        if settle is not None and alpha > 0:  # LIGGGHTS' settling of rods (engines.py)
+        if settle is not None and alpha > 0:  # LIGGGHTS' settling of rods (workflows/engines/liggghts.py)
             reach = size_extremes(d)[2] * (1.0 + alpha)
             w_min = 2.0 * (reach + 0.2 * d["mean"])
             if settle["width"] <= w_min:
