@@ -4,7 +4,7 @@ refused in one line naming the engine, shape and protocol and what does run."""
 import pytest
 
 from rodcase.case import validate_case
-from tests.workflow.test_engines import TINY
+from tests.cases import ENGINE_COMPRESS
 from workflows import capabilities, engines
 from workflows.engines import table
 
@@ -43,7 +43,7 @@ def test_the_shipped_cases_run_on_their_rows_deck():
 
 
 def test_a_missing_combination_is_one_line_naming_what_runs():
-    growth = validate_case({**TINY, "protocol": {"name": "growth", "phi_init": 0.3,
+    growth = validate_case({**ENGINE_COMPRESS, "protocol": {"name": "growth", "phi_init": 0.3,
                                                  "rate": 1e-3, "phi_grow": 0.5, "dt": 1e-4}})
     msg = engines.supports("liggghts", growth)
     assert msg == ("liggghts has no deck for spheres under protocol 'growth' (it runs compress "
