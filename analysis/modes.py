@@ -196,3 +196,15 @@ def bands(omega2: np.ndarray, n_bands: int, zero: float) -> np.ndarray:
     cuts = np.sort(np.argsort(gaps, kind="stable")[::-1][: n_bands - 1]) + 1
     out[order] = np.searchsorted(cuts, np.arange(len(order)), side="right")
     return out
+
+
+def band_means(omega2: np.ndarray, sizes, zero: float) -> np.ndarray:
+    """Mean frequency ``omega`` of consecutive groups of the nonzero modes
+    (``omega^2 > zero``) in ascending order, the first ``sizes[0]`` modes, the next
+    ``sizes[1]``, ...: the bands of a stable state followed to a compressed one, where
+    its gaps narrow and the bands merge (Marschall & Teitel 2018, Figs. 14, 18, 20)."""
+    omega = np.sqrt(np.sort(np.asarray(omega2, float)[np.asarray(omega2) > zero]))
+    edges = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
+    if edges[-1] > len(omega) or np.any(np.diff(edges) <= 0):
+        raise ValueError(f"band sizes {list(sizes)} do not fit {len(omega)} nonzero modes")
+    return np.array([omega[a:b].mean() for a, b in zip(edges[:-1], edges[1:])])

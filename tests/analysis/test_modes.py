@@ -126,3 +126,12 @@ def test_bands_refuse_more_bands_than_modes():
         modes.bands(np.ones(3), 0, 1e-12)
     with pytest.raises(ValueError, match="2 nonzero modes cannot form 3 bands"):
         modes.bands(np.array([0.0, 1.0, 2.0]), 3, 1e-12)
+
+
+def test_band_means_follow_the_stable_states_band_sizes():
+    w2 = np.array([0.0, 1e-16, 4.0, 1e-4, 1e-2, 9.0, 4e-4, 1.0])
+    # nonzero in order: omega 1e-2, 2e-2, 0.1, 1, 2, 3
+    np.testing.assert_allclose(modes.band_means(w2, [2, 1], 1e-12), [0.015, 0.1])
+    np.testing.assert_allclose(modes.band_means(w2, [3, 3], 1e-12), [0.13 / 3, 2.0])
+    with pytest.raises(ValueError, match=r"band sizes \[4, 3\] do not fit 6 nonzero modes"):
+        modes.band_means(w2, [4, 3], 1e-12)

@@ -93,11 +93,25 @@ def test_a_compression_reaches_the_energy_asked_for(tmp_path):
         modes.compressed_state(run, target, rtol=1e-9, tries=1)
 
 
+def test_the_script_follows_the_bands_up_an_energy_ladder(tmp_path):
+    run = fake_jammed_run(tmp_path)
+    u0 = modes.stable_state_modes(run)[1]["energy_density"]
+    table = tmp_path / "modes.csv"
+    assert modes.main(["--runs", str(run), "--out", str(tmp_path / "m.png"),
+                       "--table", str(table), "--energies", str(4 * u0), str(16 * u0)]) == 0
+    row = pd.read_csv(table).iloc[0]
+    for name in ("omega_below_gap", "omega_low", "omega_middle"):
+        assert np.isfinite(row[f"{name}_exponent"])
+    ladder = pd.read_csv(tmp_path / "modes.energies.csv")
+    assert len(ladder) == 3 and ladder.energy_density.is_monotonic_increasing
+    per_mode = pd.read_csv(tmp_path / "modes.modes.csv.gz")
+    assert per_mode.energy_density.nunique() == 3 and len(per_mode) == 3 * row.n_dof
+
+
 def test_frequency_exponents_are_log_log_slopes():
     u = np.array([1e-15, 1e-14, 1e-12])
-    steps = pd.DataFrame({"energy_density": u, "omega_below_gap": 3.0 * u**0.25,
-                          "omega_low": 0.1 * u**0.5, "omega_middle": 2.0 * u**0.25})
-    x = modes.frequency_exponents(steps)
+    means = np.column_stack([3.0 * u**0.25, 0.1 * u**0.5, 2.0 * u**0.25])
+    x = modes.frequency_exponents(u, means)
     assert x["omega_below_gap_exponent"] == pytest.approx(0.25, rel=1e-9)
     assert x["omega_low_exponent"] == pytest.approx(0.5, rel=1e-9)
     assert x["omega_middle_exponent"] == pytest.approx(0.25, rel=1e-9)

@@ -195,13 +195,16 @@ def modes_of(sim, case: dict, step: int, metric: str = "paper") -> tuple[pd.Data
 ENERGIES = (1e-14, 1e-12)
 
 
-def frequency_exponents(steps: pd.DataFrame) -> dict:
+def frequency_exponents(energies, means: np.ndarray) -> dict:
     """Exponents ``x`` of ``omega_band ~ (U/L^2)^x`` by least squares in log-log over a
-    state and its compressions (rows of :func:`modes_of` summaries):
+    stable state and its compressions: ``energies`` (one per state) and ``means`` (state
+    by band: below the widest gap, then the low and middle bands of the three-band split,
+    each followed by its size in the stable state, :func:`analysis.modes.band_means`):
     ``omega_below_gap_exponent``, ``omega_low_exponent``, ``omega_middle_exponent``."""
-    log_u = np.log(steps["energy_density"].to_numpy())
-    return {f"{col}_exponent": float(np.polyfit(log_u, np.log(steps[col].to_numpy()), 1)[0])
-            for col in ("omega_below_gap", "omega_low", "omega_middle")}
+    log_u = np.log(np.asarray(energies, float))
+    names = ("omega_below_gap", "omega_low", "omega_middle")
+    return {f"{name}_exponent": float(np.polyfit(log_u, np.log(means[:, k]), 1)[0])
+            for k, name in enumerate(names)}
 
 
 def plot_modes(tables: dict, out: Path) -> None:
@@ -258,7 +261,8 @@ def main(argv=None) -> int:
                     help="pysim run directories <study>/<variant>/seed<k>/pysim of 'jammed' runs")
     ap.add_argument("--out", type=Path, required=True, help="figure (.png)")
     ap.add_argument("--table", type=Path, required=True,
-                    help="per-state summary (.csv); the per-mode table goes beside it (.modes.csv.gz)")
+                    help="per-state summary (.csv); the per-mode table of every state, "
+                         "its compressions included, goes beside it (.modes.csv.gz)")
     ap.add_argument("--metric", choices=METRICS, default="paper",
                     help="dynamical matrix: the paper's Hessian in (x, y, A theta) "
                          "(default) or mass-weighted")
@@ -279,14 +283,28 @@ def main(argv=None) -> int:
         table, summary = stable_state_modes(run, a.metric)
         variant, seed = run.parent.parent.name, run.parent.name
         steps = [summary]
+        per_mode.append(table.assign(variant=variant, seed=seed,
+                                     energy_density=summary["energy_density"]))
+        zero = ZERO * float(table.omega2.abs().max())
+        two = am.bands(table.omega2.to_numpy(), 2, zero)
+        three = am.bands(table.omega2.to_numpy(), 3, zero)
+        sizes = [(two == 0).sum(), (three == 0).sum(), (three == 1).sum()]
+        means = [[*am.band_means(table.omega2, sizes[:1], zero),
+                  *am.band_means(table.omega2, sizes[1:], zero)]]
         for target in a.energies:
             case, sim, step = compressed_state(run, target)
-            steps.append(modes_of(sim, case, step, a.metric)[1])
+            above, row = modes_of(sim, case, step, a.metric)
+            steps.append(row)
+            per_mode.append(above.assign(variant=variant, seed=seed,
+                                         energy_density=row["energy_density"]))
+            top = ZERO * float(above.omega2.abs().max())
+            means.append([*am.band_means(above.omega2, sizes[:1], top),
+                          *am.band_means(above.omega2, sizes[1:], top)])
         ladder += [{"variant": variant, "seed": seed, **r} for r in steps]
         if len(steps) > 2:
-            summary.update(frequency_exponents(pd.DataFrame(steps)))
+            summary.update(frequency_exponents([r["energy_density"] for r in steps],
+                                               np.array(means)))
         rows.append({"variant": variant, "seed": seed, **summary})
-        per_mode.append(table.assign(variant=variant, seed=seed))
         tables.setdefault(variant, []).append(table)
     if not rows:
         raise SystemExit(f"no finished run among {len(a.runs)} to take modes of")
