@@ -207,17 +207,20 @@ def frequency_exponents(energies, means: np.ndarray) -> dict:
             for k, name in enumerate(names)}
 
 
-def plot_modes(tables: dict, out: Path) -> None:
-    """Three panels against frequency, one line per variant (seeds pooled): the density
-    of states of ``H`` (solid) and of its stiffness part alone (dashed; zero modes fall
-    outside), the mean
-    participation ratio and the mean rotational fraction per frequency bin."""
+def plot_modes(tables: dict, out: Path, ladder: dict | None = None) -> None:
+    """Panels against frequency, one line per variant (seeds pooled): the density of
+    states of ``H`` (solid) and of its stiffness part alone (dashed; zero modes fall
+    outside), the mean participation ratio and the mean rotational fraction per
+    frequency bin; with ``ladder`` (variant -> per-mode tables of the stable state and
+    its compressions, one per rung, seeds pooled) a fourth panel: the density of states as ``U/L^2``
+    grows (the paper's Figs. 14a, 18a)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(1, 3, figsize=(14, 4.2))
+    ladder = {v: rungs for v, rungs in (ladder or {}).items() if rungs}
+    fig, ax = plt.subplots(1, 4 if ladder else 3, figsize=(18.5 if ladder else 14, 4.2))
     # zero modes (translations, rods sliding between two flat contacts) are left out
     top = max(float(t.omega.abs().max()) for t in tables.values())
     positive = np.concatenate([t.omega[t.omega > np.sqrt(ZERO) * top]
@@ -247,6 +250,21 @@ def plot_modes(tables: dict, out: Path) -> None:
     ax[2].set(xscale="log", xlabel=r"$\omega$", ylabel="rotational fraction", ylim=(0, 1),
               title="rotational character")
     ax[0].legend(fontsize=7)
+    styles = ("--", ":", "-.")
+    for k, label in enumerate(tables):
+        if label not in ladder:
+            continue
+        colour = cmap(k / max(1, len(tables) - 1))
+        for r, rung in enumerate(ladder[label]):
+            hist, _ = np.histogram(rung.omega.to_numpy(), bins=bins)
+            hist = np.where(hist > 0, hist / (len(rung) * np.diff(bins)), np.nan)
+            u = float(np.median(rung.energy_density))
+            ax[3].plot(mid, hist, "-" if r == 0 else styles[(r - 1) % 3], color=colour,
+                       label=f"{label}, U/L$^2$ = {u:.1e}")
+    if ladder:
+        ax[3].set(xscale="log", yscale="log", xlabel=r"$\omega$", ylabel=r"$D(\omega)$",
+                  title="density of states as U grows")
+        ax[3].legend(fontsize=6)
     fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(out.stem + ".tmp.png")
@@ -328,7 +346,17 @@ def main(argv=None) -> int:
         except ValueError:
             return (1, 0.0, variant)
 
-    plot_modes({v: pd.concat(tables[v]) for v in sorted(tables, key=by_value)}, a.out)
+    rungs = {}
+    for table in per_mode:  # rung k of every seed pooled: the stable state is rung 0
+        for (variant, seed), g in table.groupby(["variant", "seed"]):
+            rungs.setdefault((variant, seed), []).append(g)
+    ladder = {}
+    for (variant, _), states in rungs.items():
+        for k, g in enumerate(states):
+            ladder.setdefault(variant, {}).setdefault(k, []).append(g)
+    ladder = {v: [pd.concat(by_rung[k]) for k in sorted(by_rung)]
+              for v, by_rung in ladder.items() if len(by_rung) > 1}
+    plot_modes({v: pd.concat(tables[v]) for v in sorted(tables, key=by_value)}, a.out, ladder)
     return 0
 
 
