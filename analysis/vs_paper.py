@@ -14,6 +14,9 @@ reference row and engine:
   ``d = ours - paper`` and ``u = sqrt(u_paper^2 + u_ours^2)`` (``u_ours`` the standard
   error of the seed mean), a ``band`` row agrees when ``|d| <= u_paper + 2 u_ours`` and
   every other row when ``|d| <= 2 u``;
+* values fitted across aspect ratios (:data:`FITS`: the small-alpha fit of the contact
+  number) are fitted to the runs' seed means and judged like a value row, with the fit's
+  standard error as ours;
 * trend rows (``expect`` increasing, decreasing or constant along ``over``): ``agrees``
   when every step moves as stated by more than two combined standard errors (constant:
   no step moves by more), ``differs`` when a step moves against it by more than that,
@@ -315,6 +318,74 @@ def _value_rows(ref, runs, results) -> list[dict]:
     return out
 
 
+#: values a paper fits across aspect ratios (Marschall & Teitel 2018, Fig. 8b):
+#: ``z - 4 = a + b alpha^x`` over the four smallest alpha > 0; name -> (observable fitted,
+#: parameter reported: ``x``, ``a`` or ``limit`` = ``4 + a``, the value as alpha -> 0+)
+FITS = {"z_j_bonds_fit_exponent": ("z_j_bonds", "x"),
+        "z_j_bonds_fit_offset": ("z_j_bonds", "a"),
+        "z_j_bonds_limit_alpha0": ("z_j_bonds", "limit"),
+        "z_j_fit_exponent": ("z_j", "x"),
+        "z_j_fit_offset": ("z_j", "a")}
+#: how many of the smallest aspect ratios the fit takes
+FIT_POINTS = 4
+
+
+def small_alpha_fit(alpha, z, sem=None) -> dict:
+    """Fit ``z - 4 = a + b alpha^x`` (Marschall & Teitel 2018, Fig. 8b) by weighted least
+    squares (``sem``: the standard errors of ``z``, or none); returns ``a``, ``b``, ``x``,
+    ``limit`` (``4 + a``) with their standard errors (``u_a``, ...) from the covariance."""
+    from scipy.optimize import curve_fit
+
+    alpha, y = np.asarray(alpha, float), np.asarray(z, float) - 4.0
+    sigma = None if sem is None or not np.all(np.isfinite(sem)) or np.any(np.asarray(sem) <= 0) \
+        else np.asarray(sem, float)
+    p, cov = curve_fit(lambda a, c, b, x: c + b * a**x, alpha, y, p0=(0.0, y.max(), 0.5),
+                       sigma=sigma, absolute_sigma=sigma is not None, maxfev=20000)
+    err = np.sqrt(np.clip(np.diag(cov), 0.0, np.inf))
+    return {"a": p[0], "b": p[1], "x": p[2], "limit": 4.0 + p[0],
+            "u_a": err[0], "u_b": err[1], "u_x": err[2], "u_limit": err[0]}
+
+
+def _fit_rows(ref, runs, results) -> list[dict]:
+    name = str(ref.observable)
+    fitted, param = FITS[name]
+    base = _base_row(ref)
+    conds = _conditions(ref)
+    groups = _engine_groups(_at_point(runs, ref, skip="alpha"), results, fitted,
+                            by=["engine", "study"])
+    out = []
+    for (engine, study), g in groups.items():
+        good, _, unchecked = _matching(g, conds, fitted)
+        alphas = sorted(a for a in good["alpha"].astype(float).unique() if a > 0)
+        use = alphas[:FIT_POINTS]
+        row = {**base, "engine": engine, "runs": _runs_label(good) if len(good) else study,
+               "note": f"unchecked: {', '.join(unchecked)}" if unchecked else ""}
+        if len(use) < FIT_POINTS:
+            row["verdict"] = "not run"
+            row["note"] = "; ".join(x for x in (row["note"], f"the fit takes {FIT_POINTS} "
+                                   f"aspect ratios > 0 under the paper's conditions, "
+                                   f"{study} has {len(use)}") if x)
+            out.append(row)
+            continue
+        stats = [_stats(good.loc[np.isclose(good["alpha"].astype(float), a), "value"])
+                 for a in use]
+        z = [m for m, _, _ in stats]
+        sem = [e for _, e, _ in stats]
+        fit = small_alpha_fit(use, z, sem)
+        value, u_ours = fit[param], fit[f"u_{param}"]
+        up = base["paper_uncertainty"]
+        u = math.hypot(up, u_ours) if np.isfinite(u_ours) else up
+        d = value - base["paper_value"]
+        row.update(ours=value, ours_uncertainty=u_ours, n_seeds=min(n for *_, n in stats),
+                   diff_sigma=d / u if u > 0 else float("nan"),
+                   verdict="agrees" if abs(d) <= 2.0 * u else "differs")
+        row["note"] = "; ".join(x for x in (row["note"], "fit over alpha = " + ", ".join(
+            f"{a:g}" for a in use)) if x)
+        out.append(row)
+    return out or [{**base, "engine": "", "verdict": "not run",
+                    "note": f"no run reports {fitted}"}]
+
+
 def _trend_rows(ref, runs, results) -> list[dict]:
     base = _base_row(ref)
     over = _over(ref)
@@ -408,7 +479,10 @@ def match(refs: pd.DataFrame, runs: pd.DataFrame, results: pd.DataFrame) -> pd.D
                                         "value", "uncertainty"])
     rows = []
     for ref in refs.itertuples(index=False):
-        rows += (_value_rows if ref.kind == "value" else _trend_rows)(ref, runs, results)
+        if ref.kind == "value" and str(ref.observable) in FITS:
+            rows += _fit_rows(ref, runs, results)
+        else:
+            rows += (_value_rows if ref.kind == "value" else _trend_rows)(ref, runs, results)
     out = pd.DataFrame(rows)
     for c in OUTPUT_COLUMNS:
         if c not in out:

@@ -203,3 +203,44 @@ def test_two_cases_at_one_point_are_two_results_not_two_seeds():
     res = pd.concat([res, c[1]], ignore_index=True)
     r = match(refs(trend("increasing", over="1;4")), runs, res).iloc[0]
     assert r.verdict == "unresolved" and "several cases at alpha 1: mu0, mu0.5" in r.note
+
+
+def test_small_alpha_fit_recovers_its_parameters():
+    from analysis.vs_paper import small_alpha_fit
+
+    alpha = np.array([0.001, 0.003, 0.01, 0.03])
+    fit = small_alpha_fit(alpha, 4.31 + 1.5 * alpha**0.68, np.full(4, 1e-3))
+    assert fit["x"] == pytest.approx(0.68, abs=1e-6)
+    assert fit["a"] == pytest.approx(0.31, abs=1e-6)
+    assert fit["limit"] == pytest.approx(4.31, abs=1e-6) and fit["u_x"] > 0
+
+
+def fit_data(alphas, spread=0.002):
+    return trend_data({a: 4.31 + 1.5 * a**0.68 for a in alphas}, spread=spread)
+
+
+def fit_ref(observable, value, uncertainty):
+    return ref(observable=observable, alpha=np.nan, value=value, uncertainty=uncertainty)
+
+
+def test_fitted_values_across_aspect_ratios():
+    runs, res = fit_data([0.001, 0.003, 0.01, 0.03, 0.1, 1.0])
+    res["observable"] = "z_j_bonds"
+    table = match(refs(fit_ref("z_j_bonds_fit_exponent", 0.68, 0.13),
+                       {**fit_ref("z_j_bonds_limit_alpha0", 4.31, 0.08), "id": "p-02"},
+                       {**fit_ref("z_j_bonds_fit_offset", 0.9, 0.08), "id": "p-03"}),
+                  runs, res)
+    assert list(table.verdict) == ["agrees", "agrees", "differs"]
+    assert table.iloc[0].ours == pytest.approx(0.68, abs=0.05)
+    assert "fit over alpha = 0.001, 0.003, 0.01, 0.03" in table.iloc[0].note
+    # the fit of z_j_bonds needs runs that report z_j_bonds
+    other = match(refs(fit_ref("z_j_bonds_fit_exponent", 0.68, 0.13)), runs,
+                  res.assign(observable="z_j"))
+    assert other.iloc[0].verdict == "not run"
+
+
+def test_a_fit_with_too_few_aspect_ratios_is_not_run():
+    runs, res = fit_data([0.01, 0.03, 0.1])
+    res["observable"] = "z_j_bonds"
+    row = match(refs(fit_ref("z_j_bonds_fit_exponent", 0.68, 0.13)), runs, res).iloc[0]
+    assert row.verdict == "not run" and "jamming_2d_paper has 3" in row.note
