@@ -3,10 +3,13 @@
 One concept per module:
 
 * :mod:`~pysim.contacts.kinematics`: the pair's geometry as scalars, the minimum image
-  (:func:`min_image`) and the contact points of two spines (:func:`spine_gap`; 2-D rods
-  also :func:`end_bond`).
-* :mod:`~pysim.contacts.law`: the contact law of one pair (:func:`pair_force`: the laws
-  of :mod:`pysim.forces` at the contact point).
+  (:func:`min_image`), the contact points of two spines (:func:`spine_gap`; 2-D rods
+  also :func:`end_bond`), and the normal, overlap and relative velocity at the contact
+  (:func:`~pysim.contacts.kinematics.contact_motion`).
+* :mod:`~pysim.contacts.law`: the contact law, written once
+  (:func:`~pysim.contacts.law.contact_law`: normal part, tangential part with the
+  spring, cohesion), inlined into every pass, their SIMD lanes and the walls
+  (:mod:`pysim.walls`); :func:`pair_force`, the law at a pair's closest points.
 * :mod:`~pysim.contacts.pair`: the general loops, one pair at a time, for any shape and
   law: :func:`pair_pass` (every step) and :func:`pair_forces` (serial, records the
   contact table).

@@ -13,7 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 from pysim.geometry import closest_params
-from pysim.jit import njit
+from pysim.jit import inline_njit, njit
+
 
 @njit
 def min_image(d0, d1, d2, b0, b1, b2, p0, p1, p2):
@@ -64,3 +65,38 @@ def end_bond(d0, d1, d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj, k):
     a1 = s * ui1
     a2 = s * ui2
     return a0, a1, a2, d0 + t * uj0 - a0, d1 + t * uj1 - a1, d2 + t * uj2 - a2
+
+
+@inline_njit
+def contact_motion(g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, ri, rj, vi0, vi1, vi2, wi0,
+                   wi1, wi2, vj0, vj1, vj2, wj0, wj1, wj2):
+    """Normal, overlap and relative motion at the contact of a pair within reach: gap
+    ``g = p_j - p_i`` (``|g|^2 = dist2``), ``a = p_i - x_i``, ``d = x_j - x_i``, radii,
+    velocities and spins of both.
+
+    ``n = g/|g|``, ``delta = R_i + R_j - |g|``, the contact point in the middle of the
+    overlap relative to ``x_i``, ``c = a + (R_i - delta/2) n``, and to ``x_j``,
+    ``e = c - d``; the relative velocity of the contact points ``v_rel = (v_i + w_i x c)
+    - (v_j + w_j x e)`` and its normal part ``v_rel . n``. Returns ``(n (3), delta,
+    R_i + R_j, c (3), e (3), v_rel (3), v_rel . n)``."""
+    dist = np.sqrt(dist2)
+    inv = 1.0 / dist
+    n0 = g0 * inv
+    n1 = g1 * inv
+    n2 = g2 * inv
+    rs = ri + rj
+    delta = rs - dist
+    # contact point relative to x_i, and relative to x_j
+    ar = ri - 0.5 * delta
+    c0 = a0 + ar * n0
+    c1 = a1 + ar * n1
+    c2 = a2 + ar * n2
+    e0 = c0 - d0
+    e1 = c1 - d1
+    e2 = c2 - d2
+    # relative velocity of the contact points (i minus j)
+    vr0 = vi0 + (wi1 * c2 - wi2 * c1) - vj0 - (wj1 * e2 - wj2 * e1)
+    vr1 = vi1 + (wi2 * c0 - wi0 * c2) - vj1 - (wj2 * e0 - wj0 * e2)
+    vr2 = vi2 + (wi0 * c1 - wi1 * c0) - vj2 - (wj0 * e1 - wj1 * e0)
+    vn = vr0 * n0 + vr1 * n1 + vr2 * n2
+    return n0, n1, n2, delta, rs, c0, c1, c2, e0, e1, e2, vr0, vr1, vr2, vn

@@ -1,16 +1,79 @@
-"""The contact law of one pair within reach, as scalars in and out: normal
-spring-dashpot, tangential spring with history and Coulomb cap, cohesion (the laws of
-:mod:`pysim.forces`), at the contact point in the middle of the overlap
-(:mod:`pysim.contacts.kinematics`). It takes and returns scalars only, so that the hot
-loops pass no arrays to it (an array argument costs atomic reference-count updates per
+"""The contact law, written once: every contact of pysim (pair passes, SIMD lanes of
+spheres and rods, walls) takes its forces from :func:`contact_law`.
+
+Given the unit normal ``n`` from ``i`` to the other body, the overlap ``delta``, the
+relative velocity ``v_rel`` of the contact points (``i`` minus the other) and the
+tangential spring ``xi_t``:
+
+* normal part (:func:`normal_part`): ``f_n`` the normal law of :mod:`pysim.forces`
+  while touching (``delta > 0``), zero otherwise, plus the cohesion ``-F_c`` within
+  the gap ``d_c``;
+* tangential part (:func:`tangential_part`): while touching, the spring with history,
+  dashpot and Coulomb cap (:func:`pysim.forces.tangential_force`) on the tangential
+  velocity ``v_t = v_rel - (v_rel . n) n``; out of contact no force and the spring
+  restarts at zero;
+* force on i ``F = -f_n n + F_t``, on the other body ``-F``.
+
+The parts are written with selects, not branches on the contact, and inlined into their
+callers (``inline='always'``), so that the loops of :mod:`pysim.contacts.spheres` and
+:mod:`pysim.contacts.rods` that call them per lane still run on SIMD lanes. They take
+and return scalars only (an array argument costs atomic reference-count updates per
 call).
 """
 from __future__ import annotations
 
-import numpy as np
-
+from pysim.contacts.kinematics import contact_motion
 from pysim.forces import KEEP_SPRING, cohesion_force, normal_force, tangential_force
-from pysim.jit import njit
+from pysim.jit import inline_njit, njit
+
+
+@inline_njit
+def normal_part(law, kn, gn, fcoh, dcoh, delta, vn, rs):
+    """Normal force magnitude (repulsive positive): :func:`pysim.forces.normal_force` of
+    the overlap ``delta``, its rate ``vn`` and ``rs = R_i + R_j`` while ``delta > 0``,
+    else 0; plus :func:`pysim.forces.cohesion_force` (``-F_c`` while ``-delta < d_c``)
+    when ``fcoh`` is not zero."""
+    fn = normal_force(law, kn, gn, delta, vn, rs) if delta > 0.0 else 0.0
+    if fcoh != 0.0:
+        fn += cohesion_force(fcoh, dcoh, delta)
+    return fn
+
+
+@inline_njit
+def tangential_part(kt, gt, mu, fn, x0, x1, x2, n0, n1, n2, vr0, vr1, vr2, vt, dt, keep,
+                    touch):
+    """Tangential force on i and the new spring: :func:`pysim.forces.tangential_force`
+    with the tangential velocity ``v_rel - vt n`` (``vt = v_rel . n``) while ``touch``;
+    out of contact (a cohesive gap) no force and a zero spring. Returns ``(F_t (3),
+    xi_t (3))``."""
+    f0, f1, f2, y0, y1, y2 = tangential_force(kt, gt, mu, fn, x0, x1, x2, n0, n1, n2,
+                                              vr0 - vt * n0, vr1 - vt * n1, vr2 - vt * n2,
+                                              dt, keep)
+    return (f0 if touch else 0.0, f1 if touch else 0.0, f2 if touch else 0.0,
+            y0 if touch else 0.0, y1 if touch else 0.0, y2 if touch else 0.0)
+
+
+@inline_njit
+def contact_law(law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt, delta, rs, n0, n1, n2,
+                vr0, vr1, vr2, vn, vt, x0, x1, x2):
+    """Force of one contact within reach (the module's law): ``n`` the unit normal from
+    i, ``delta`` the overlap, ``rs`` the contact distance ``R_i + R_j`` of the normal law,
+    ``v_rel`` the relative contact-point velocity, ``vn`` the overlap rate of the normal
+    law, ``vt = v_rel . n`` (the same, except for spheres: :mod:`pysim.contacts.spheres`),
+    ``x`` the tangential spring (used and updated with ``friction`` only).
+
+    Returns ``(F (3), F_t (3), x (3))``: the force on i ``F = -f_n n + F_t``, its
+    tangential part and the new spring."""
+    fn = normal_part(law, kn, gn, fcoh, dcoh, delta, vn, rs)
+    ft0 = 0.0
+    ft1 = 0.0
+    ft2 = 0.0
+    if friction:
+        ft0, ft1, ft2, x0, x1, x2 = tangential_part(kt, gt, mu, fn, x0, x1, x2, n0, n1, n2,
+                                                    vr0, vr1, vr2, vt, dt,
+                                                    (law & KEEP_SPRING) != 0, delta > 0.0)
+    return -fn * n0 + ft0, -fn * n1 + ft1, -fn * n2 + ft2, ft0, ft1, ft2, x0, x1, x2
+
 
 @njit
 def pair_force(g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, ri, rj, vi0, vi1, vi2, wi0, wi1,
@@ -19,50 +82,18 @@ def pair_force(g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, ri, rj, vi0, vi1, vi2,
     """Force of a pair within reach: gap ``g`` (``|g|^2 = dist2``), ``a = p_i - x_i``,
     ``d = x_j - x_i``, radii, velocities and spins of both, tangential spring ``x``.
 
-    Contact-point velocity ``v_rel = (v_i + w_i x (c - x_i)) - (v_j + w_j x (c - x_j))``,
-    overlap rate ``v_rel . n``, normal force (when ``delta > 0``) plus cohesion,
-    tangential force with the spring when ``friction`` (reset to zero when not
-    touching); force on i ``F = -f_n n + F_t``, on j ``-F``.
+    The contact point, normal and relative velocity of
+    :func:`pysim.contacts.kinematics.contact_motion`, then :func:`contact_law` with the
+    overlap rate ``v_rel . n`` and ``R_i + R_j``; force on i ``F = -f_n n + F_t``, on j
+    ``-F``.
 
     Returns ``(F (3), c (3), e (3), n (3), delta, x (3))``: ``c`` and ``e`` the contact
     point relative to ``x_i`` and ``x_j``, ``n`` the unit normal, ``x`` the new spring.
     """
-    dist = np.sqrt(dist2)
-    inv = 1.0 / dist
-    n0 = g0 * inv
-    n1 = g1 * inv
-    n2 = g2 * inv
-    rs = ri + rj
-    delta = rs - dist
-    # contact point relative to x_i, and relative to x_j
-    ar = ri - 0.5 * delta
-    c0 = a0 + ar * n0
-    c1 = a1 + ar * n1
-    c2 = a2 + ar * n2
-    e0 = c0 - d0
-    e1 = c1 - d1
-    e2 = c2 - d2
-    # relative velocity of the contact points (i minus j)
-    vr0 = vi0 + (wi1 * c2 - wi2 * c1) - vj0 - (wj1 * e2 - wj2 * e1)
-    vr1 = vi1 + (wi2 * c0 - wi0 * c2) - vj1 - (wj2 * e0 - wj0 * e2)
-    vr2 = vi2 + (wi0 * c1 - wi1 * c0) - vj2 - (wj0 * e1 - wj1 * e0)
-    vn = vr0 * n0 + vr1 * n1 + vr2 * n2
-    fn = 0.0
-    if delta > 0.0:
-        fn = normal_force(law, kn, gn, delta, vn, rs)
-    if fcoh != 0.0:
-        fn += cohesion_force(fcoh, dcoh, delta)
-    ft0 = 0.0
-    ft1 = 0.0
-    ft2 = 0.0
-    if friction:
-        if delta > 0.0:
-            ft0, ft1, ft2, x0, x1, x2 = tangential_force(
-                kt, gt, mu, fn, x0, x1, x2, n0, n1, n2, vr0 - vn * n0, vr1 - vn * n1,
-                vr2 - vn * n2, dt, (law & KEEP_SPRING) != 0)
-        else:
-            x0 = 0.0
-            x1 = 0.0
-            x2 = 0.0
-    return (-fn * n0 + ft0, -fn * n1 + ft1, -fn * n2 + ft2, c0, c1, c2, e0, e1, e2, n0, n1,
-            n2, delta, x0, x1, x2)
+    (n0, n1, n2, delta, rs, c0, c1, c2, e0, e1, e2, vr0, vr1, vr2, vn) = contact_motion(
+        g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, ri, rj, vi0, vi1, vi2, wi0, wi1, wi2, vj0,
+        vj1, vj2, wj0, wj1, wj2)
+    F0, F1, F2, _, _, _, x0, x1, x2 = contact_law(law, kn, gn, kt, gt, mu, fcoh, dcoh,
+                                                  friction, dt, delta, rs, n0, n1, n2, vr0,
+                                                  vr1, vr2, vn, vn, x0, x1, x2)
+    return F0, F1, F2, c0, c1, c2, e0, e1, e2, n0, n1, n2, delta, x0, x1, x2

@@ -6,14 +6,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from pysim.contacts.kinematics import min_image
+from pysim.contacts.kinematics import contact_motion, min_image
+from pysim.contacts.law import contact_law
 from pysim.contacts.partition import (BLOCK, _close_part, _part_flags, _zero_rows,
                                       part_bounds)
 from pysim.contacts.reactions import SEP, _finish_row, _reaction, _store_chunk
 from pysim.contacts.spheres import PAD
 from pysim.contacts.stats import _STATS, _note_overlap, block_totals, block_worst
-from pysim.forces import (D_COH, F_COH, GAMMA_N, GAMMA_T, K_N, K_T, KEEP_SPRING, MU,
-                          cohesion_force, elastic_energy, normal_force, tangential_force)
+from pysim.forces import D_COH, F_COH, GAMMA_N, GAMMA_T, K_N, K_T, MU, elastic_energy
 from pysim.geometry import closest_select
 from pysim.jit import njit, pnjit, prange, prefetch_write
 
@@ -177,73 +177,37 @@ def _rod_select(A, ma, ka, kb, mo, pi, pj, v, omega, hist, dcoh, friction, R, kr
 
 @njit
 def _rod_laws(R, mr, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
-    """:func:`pair_force` of the ``mr`` pairs in reach of ``R``, with selects instead of
-    branches on the pair (SIMD lanes), and :func:`pair_pass`'s sums of one bond: the
-    force on i, the torques on i and j, the elastic energy (0 out of overlap), the spring
-    (in place) and the overlap. On ``mr`` rounded up to :data:`PAD` columns."""
-    cohesive = fcoh != 0.0
-    keep_spring = (law & KEEP_SPRING) != 0
+    """:func:`pysim.contacts.law.pair_force` of the ``mr`` pairs in reach of ``R`` (its two
+    parts, :func:`pysim.contacts.kinematics.contact_motion` and
+    :func:`pysim.contacts.law.contact_law`), one lane each (both are inlined and written
+    with selects, not branches on the pair, so that the loop runs on SIMD lanes), and :func:`pair_pass`'s sums of one bond: the force on
+    i, the torques on i and j, the elastic energy (0 out of overlap), the spring (in
+    place) and the overlap. On ``mr`` rounded up to :data:`PAD` columns."""
     mr = min(RCAP, (mr + PAD - 1) // PAD * PAD)
     for m in range(mr):
-        g0 = R[np.uint64(_RG * RCAP + m)]
-        g1 = R[np.uint64((_RG + 1) * RCAP + m)]
-        g2 = R[np.uint64((_RG + 2) * RCAP + m)]
-        a0 = R[np.uint64(_RA * RCAP + m)]
-        a1 = R[np.uint64((_RA + 1) * RCAP + m)]
-        a2 = R[np.uint64((_RA + 2) * RCAP + m)]
-        d0 = R[np.uint64(_RD * RCAP + m)]
-        d1 = R[np.uint64((_RD + 1) * RCAP + m)]
-        d2 = R[np.uint64((_RD + 2) * RCAP + m)]
         ri = R[np.uint64(_RRI * RCAP + m)]
         rj = R[np.uint64(_RRJ * RCAP + m)]
-        dist = np.sqrt(R[np.uint64(_RDIST2 * RCAP + m)])
-        inv = 1.0 / dist
-        n0 = g0 * inv
-        n1 = g1 * inv
-        n2 = g2 * inv
-        rs = ri + rj
-        delta = rs - dist
-        ar = ri - 0.5 * delta
-        c0 = a0 + ar * n0
-        c1 = a1 + ar * n1
-        c2 = a2 + ar * n2
-        e0 = c0 - d0
-        e1 = c1 - d1
-        e2 = c2 - d2
-        wi0 = R[np.uint64(_RWI * RCAP + m)]
-        wi1 = R[np.uint64((_RWI + 1) * RCAP + m)]
-        wi2 = R[np.uint64((_RWI + 2) * RCAP + m)]
-        wj0 = R[np.uint64(_RWJ * RCAP + m)]
-        wj1 = R[np.uint64((_RWJ + 1) * RCAP + m)]
-        wj2 = R[np.uint64((_RWJ + 2) * RCAP + m)]
-        vr0 = (R[np.uint64(_RVI * RCAP + m)] + (wi1 * c2 - wi2 * c1)
-               - R[np.uint64(_RVJ * RCAP + m)] - (wj1 * e2 - wj2 * e1))
-        vr1 = (R[np.uint64((_RVI + 1) * RCAP + m)] + (wi2 * c0 - wi0 * c2)
-               - R[np.uint64((_RVJ + 1) * RCAP + m)] - (wj2 * e0 - wj0 * e2))
-        vr2 = (R[np.uint64((_RVI + 2) * RCAP + m)] + (wi0 * c1 - wi1 * c0)
-               - R[np.uint64((_RVJ + 2) * RCAP + m)] - (wj0 * e1 - wj1 * e0))
-        vn = vr0 * n0 + vr1 * n1 + vr2 * n2
-        touch = delta > 0.0
-        fn = normal_force(law, kn, gn, delta, vn, rs) if touch else 0.0
-        if cohesive:
-            fn += cohesion_force(fcoh, dcoh, delta)
-        ft0 = 0.0
-        ft1 = 0.0
-        ft2 = 0.0
+        (n0, n1, n2, delta, rs, c0, c1, c2, e0, e1, e2, vr0, vr1, vr2, vn) = contact_motion(
+            R[np.uint64(_RG * RCAP + m)], R[np.uint64((_RG + 1) * RCAP + m)],
+            R[np.uint64((_RG + 2) * RCAP + m)], R[np.uint64(_RA * RCAP + m)],
+            R[np.uint64((_RA + 1) * RCAP + m)], R[np.uint64((_RA + 2) * RCAP + m)],
+            R[np.uint64(_RD * RCAP + m)], R[np.uint64((_RD + 1) * RCAP + m)],
+            R[np.uint64((_RD + 2) * RCAP + m)], R[np.uint64(_RDIST2 * RCAP + m)], ri, rj,
+            R[np.uint64(_RVI * RCAP + m)], R[np.uint64((_RVI + 1) * RCAP + m)],
+            R[np.uint64((_RVI + 2) * RCAP + m)], R[np.uint64(_RWI * RCAP + m)],
+            R[np.uint64((_RWI + 1) * RCAP + m)], R[np.uint64((_RWI + 2) * RCAP + m)],
+            R[np.uint64(_RVJ * RCAP + m)], R[np.uint64((_RVJ + 1) * RCAP + m)],
+            R[np.uint64((_RVJ + 2) * RCAP + m)], R[np.uint64(_RWJ * RCAP + m)],
+            R[np.uint64((_RWJ + 1) * RCAP + m)], R[np.uint64((_RWJ + 2) * RCAP + m)])
+        B0, B1, B2, _, _, _, x0, x1, x2 = contact_law(
+            law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt, delta, rs, n0, n1, n2, vr0, vr1,
+            vr2, vn, vn, R[np.uint64(_RH * RCAP + m)], R[np.uint64((_RH + 1) * RCAP + m)],
+            R[np.uint64((_RH + 2) * RCAP + m)])
         if friction:
-            f0, f1, f2, x0, x1, x2 = tangential_force(
-                kt, gt, mu, fn, R[np.uint64(_RH * RCAP + m)], R[np.uint64((_RH + 1) * RCAP + m)],
-                R[np.uint64((_RH + 2) * RCAP + m)], n0, n1, n2, vr0 - vn * n0, vr1 - vn * n1,
-                vr2 - vn * n2, dt, keep_spring)
-            ft0 = f0 if touch else 0.0
-            ft1 = f1 if touch else 0.0
-            ft2 = f2 if touch else 0.0
-            R[np.uint64(_RH * RCAP + m)] = x0 if touch else 0.0
-            R[np.uint64((_RH + 1) * RCAP + m)] = x1 if touch else 0.0
-            R[np.uint64((_RH + 2) * RCAP + m)] = x2 if touch else 0.0
-        B0 = -fn * n0 + ft0
-        B1 = -fn * n1 + ft1
-        B2 = -fn * n2 + ft2
+            R[np.uint64(_RH * RCAP + m)] = x0
+            R[np.uint64((_RH + 1) * RCAP + m)] = x1
+            R[np.uint64((_RH + 2) * RCAP + m)] = x2
+        # 0.0 + ...: pair_pass's sums over the bonds start from zero (the same bits)
         R[np.uint64(_RF * RCAP + m)] = 0.0 + B0
         R[np.uint64((_RF + 1) * RCAP + m)] = 0.0 + B1
         R[np.uint64((_RF + 2) * RCAP + m)] = 0.0 + B2
@@ -254,7 +218,8 @@ def _rod_laws(R, mr, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
         R[np.uint64((_RU + 1) * RCAP + m)] = 0.0 - (e2 * B0 - e0 * B2)
         R[np.uint64((_RU + 2) * RCAP + m)] = 0.0 - (e0 * B1 - e1 * B0)
         R[np.uint64(_RDELTA * RCAP + m)] = delta
-        R[np.uint64(_RPE * RCAP + m)] = 0.0 + elastic_energy(law, kn, delta, rs) if touch else 0.0
+        R[np.uint64(_RPE * RCAP + m)] = (0.0 + elastic_energy(law, kn, delta, rs)
+                                         if delta > 0.0 else 0.0)
 
 
 @njit

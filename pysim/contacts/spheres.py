@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from pysim.contacts.law import contact_law, normal_part
 from pysim.contacts.partition import (BLOCK, _close_part, _part_flags, _zero_rows,
                                       part_bounds)
 from pysim.contacts.reactions import _finish_row, _reaction, _store_chunk
 from pysim.contacts.stats import _STATS, _note_overlap, block_totals, block_worst
-from pysim.forces import (D_COH, F_COH, GAMMA_N, GAMMA_T, K_N, K_T, KEEP_SPRING, MU,
-                          cohesion_force, elastic_energy, normal_force, tangential_force)
+from pysim.forces import D_COH, F_COH, GAMMA_N, GAMMA_T, K_N, K_T, MU, elastic_energy
 from pysim.jit import njit, pnjit, prange
 
 #: listed pairs per chunk of :func:`sphere_pass`. Its scratch holds ``_NS`` rows of ``CAP``
@@ -106,13 +106,17 @@ def _sphere_gather(k0, k1, pi, pj, x, v, omega, radius, b0, b1, b2, p0, p1, p2, 
 
 @njit
 def _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
-    """The contact laws (:func:`pair_force` for spheres) of the ``mc`` gathered pairs,
-    written with selects instead of branches on the pair so that the loop runs on SIMD
-    lanes: the same operations in the same order, so the same bits. Writes the force on
-    i, the torques on i and j, the new spring and the overlap into ``S``; on the first
-    ``mc`` columns rounded up to a multiple of :data:`PAD`."""
-    cohesive = fcoh != 0.0
-    keep_spring = (law & KEEP_SPRING) != 0
+    """The contact law (:func:`pysim.contacts.law.contact_law`) of the ``mc`` gathered
+    pairs, one lane each (the law is inlined and written with selects, not branches on
+    the pair, so that the loop runs on SIMD lanes). Writes the force on i, the torques on
+    i and j, the new spring and the overlap into ``S``; on the first ``mc`` columns
+    rounded up to a multiple of :data:`PAD`.
+
+    The kinematics are those of spheres, not :func:`pysim.contacts.kinematics.
+    contact_motion`: the contact point lies on the line of centres (``c = (R_i -
+    delta/2) n`` from ``x_i``, ``e = c - d`` written ``(R_i - delta/2 - |d|) n``), so
+    spins add no normal velocity and the overlap rate is ``(v_i - v_j) . n``, and the
+    normal force exerts no torque: the torques are those of the tangential force."""
     mc = min(CAP, (mc + PAD - 1) // PAD * PAD)
     if not friction:
         for m in range(mc):
@@ -130,10 +134,10 @@ def _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
             dv1 = S[np.uint64((_VI + 1) * CAP + m)] - S[np.uint64((_VJ + 1) * CAP + m)]
             dv2 = S[np.uint64((_VI + 2) * CAP + m)] - S[np.uint64((_VJ + 2) * CAP + m)]
             vn = dv0 * n0 + dv1 * n1 + dv2 * n2
-            fn = normal_force(law, kn, gn, delta, vn, rs) if delta > 0.0 else 0.0
-            if cohesive:
-                fn += cohesion_force(fcoh, dcoh, delta)
+            fn = normal_part(law, kn, gn, fcoh, dcoh, delta, vn, rs)
             S[np.uint64(_DELTA * CAP + m)] = delta
+            # the normal part alone, -f_n n: contact_law would add a zero tangential force,
+            # one more vector add per component (and -0.0 + 0.0 drops a zero's sign)
             S[np.uint64(_F * CAP + m)] = -fn * n0
             S[np.uint64((_F + 1) * CAP + m)] = -fn * n1
             S[np.uint64((_F + 2) * CAP + m)] = -fn * n2
@@ -156,14 +160,7 @@ def _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
         n1 = d1 * inv
         n2 = d2 * inv
         delta = rs - dist
-        touch = delta > 0.0
         vn = (vi0 - vj0) * n0 + (vi1 - vj1) * n1 + (vi2 - vj2) * n2
-        fn = normal_force(law, kn, gn, delta, vn, rs) if touch else 0.0
-        if cohesive:
-            fn += cohesion_force(fcoh, dcoh, delta)
-        F0 = -fn * n0
-        F1 = -fn * n1
-        F2 = -fn * n2
         S[np.uint64(_DELTA * CAP + m)] = delta
         ar = ri - 0.5 * delta  # contact point c = ar n from x_i, e = c - d
         er = ar - dist
@@ -183,22 +180,16 @@ def _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
         vr1 = vi1 + (wi2 * c0 - wi0 * c2) - vj1 - (wj2 * e0 - wj0 * e2)
         vr2 = vi2 + (wi0 * c1 - wi1 * c0) - vj2 - (wj0 * e1 - wj1 * e0)
         vt = vr0 * n0 + vr1 * n1 + vr2 * n2
-        t0 = vr0 - vt * n0
-        t1 = vr1 - vt * n1
-        t2 = vr2 - vt * n2
-        f0, f1, f2, x0, x1, x2 = tangential_force(
-            kt, gt, mu, fn, S[np.uint64(_H * CAP + m)], S[np.uint64((_H + 1) * CAP + m)],
-            S[np.uint64((_H + 2) * CAP + m)], n0, n1, n2, t0, t1, t2, dt, keep_spring)
-        # out of contact (a cohesive gap): no tangential force, the spring restarts
-        f0 = f0 if touch else 0.0
-        f1 = f1 if touch else 0.0
-        f2 = f2 if touch else 0.0
-        S[np.uint64(_H * CAP + m)] = x0 if touch else 0.0
-        S[np.uint64((_H + 1) * CAP + m)] = x1 if touch else 0.0
-        S[np.uint64((_H + 2) * CAP + m)] = x2 if touch else 0.0
-        S[np.uint64(_F * CAP + m)] = F0 + f0
-        S[np.uint64((_F + 1) * CAP + m)] = F1 + f1
-        S[np.uint64((_F + 2) * CAP + m)] = F2 + f2
+        F0, F1, F2, f0, f1, f2, x0, x1, x2 = contact_law(
+            law, kn, gn, kt, gt, mu, fcoh, dcoh, True, dt, delta, rs, n0, n1, n2, vr0, vr1,
+            vr2, vn, vt, S[np.uint64(_H * CAP + m)], S[np.uint64((_H + 1) * CAP + m)],
+            S[np.uint64((_H + 2) * CAP + m)])
+        S[np.uint64(_H * CAP + m)] = x0
+        S[np.uint64((_H + 1) * CAP + m)] = x1
+        S[np.uint64((_H + 2) * CAP + m)] = x2
+        S[np.uint64(_F * CAP + m)] = F0
+        S[np.uint64((_F + 1) * CAP + m)] = F1
+        S[np.uint64((_F + 2) * CAP + m)] = F2
         S[np.uint64(_T * CAP + m)] = c1 * f2 - c2 * f1
         S[np.uint64((_T + 1) * CAP + m)] = c2 * f0 - c0 * f2
         S[np.uint64((_T + 2) * CAP + m)] = c0 * f1 - c1 * f0
