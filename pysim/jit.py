@@ -19,7 +19,7 @@ unless set; :func:`max_threads`); Numba's default is the whole pool, the CLI's
 (``python -m pysim run --threads N``) is 1, as in the pipeline.
 
 One hint beyond Numba's own: :func:`prefetch_write` (``llvm.prefetch``), for the rod pass's
-scattered updates (see :func:`pysim.contacts._rod_select`).
+scattered updates (see :func:`pysim.contacts.rods._rod_select`).
 
 Set ``NUMBA_DISABLE_JIT=1`` to run every kernel as plain Python (slow, but with
 readable tracebacks and real coverage).

@@ -14,17 +14,18 @@ A tapped base is ``amp = a``, ``omega_w = 2 pi nu``. Cylinders are rows of
 ``(n_cyl, CYL_COLUMNS)``: axis ``x = cx, y = cy`` along ``z``, inner radius ``rc``; grains
 are inside.
 
-Wall contacts use the same normal law and tangential history (per grain, wall and
-spine end), with the same law bits (:data:`pysim.forces.NO_TENSION`,
-:data:`pysim.forces.KEEP_SPRING`), with the wall's own parameters; the force on each wall is summed
+Wall contacts use the contact law of the pairs (:func:`pysim.contacts.law.contact_law`)
+and a tangential history per grain, wall and spine end, with the same law bits
+(:data:`pysim.forces.NO_TENSION`, :data:`pysim.forces.KEEP_SPRING`), with the wall's own
+parameters; the force on each wall is summed
 (``wall_force``), which gives wall stresses and the apparent mass on a base.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from pysim.forces import (D_COH, F_COH, GAMMA_N, GAMMA_T, K_N, K_T, KEEP_SPRING, MU,
-                          cohesion_force, normal_force, tangential_force)
+from pysim.contacts.law import contact_law
+from pysim.forces import D_COH, F_COH, GAMMA_N, GAMMA_T, K_N, K_T, MU
 from pysim.jit import njit
 
 PLANE_COLUMNS = 10
@@ -67,28 +68,18 @@ def _wall_contact(i, e0, e1, e2, n0, n1, n2, delta, wv0, wv1, wv2, x, v, omega, 
     vr1 = v[i, 1] + (w2 * c0 - w0 * c2) - wv1
     vr2 = v[i, 2] + (w0 * c1 - w1 * c0) - wv2
     vn = vr0 * n0 + vr1 * n1 + vr2 * n2
-    fn = 0.0
-    if delta > 0.0:
-        fn = normal_force(law, wp[K_N], wp[GAMMA_N], delta, vn, 2.0 * radius[i])
-    fn += cohesion_force(wp[F_COH], wp[D_COH], delta)
-    ft0 = 0.0
-    ft1 = 0.0
-    ft2 = 0.0
+    x0 = 0.0
+    x1 = 0.0
+    x2 = 0.0
+    if friction:  # no springs are kept without friction
+        x0, x1, x2 = whist[h, 0], whist[h, 1], whist[h, 2]
+    F0, F1, F2, _, _, _, x0, x1, x2 = contact_law(
+        law, wp[K_N], wp[GAMMA_N], wp[K_T], wp[GAMMA_T], wp[MU], wp[F_COH], wp[D_COH],
+        friction, dt, delta, 2.0 * radius[i], n0, n1, n2, vr0, vr1, vr2, vn, vn, x0, x1, x2)
     if friction:
-        if delta > 0.0:
-            ft0, ft1, ft2, x0, x1, x2 = tangential_force(
-                wp[K_T], wp[GAMMA_T], wp[MU], fn, whist[h, 0], whist[h, 1], whist[h, 2], n0, n1,
-                n2, vr0 - vn * n0, vr1 - vn * n1, vr2 - vn * n2, dt, (law & KEEP_SPRING) != 0)
-            whist[h, 0] = x0
-            whist[h, 1] = x1
-            whist[h, 2] = x2
-        else:
-            whist[h, 0] = 0.0
-            whist[h, 1] = 0.0
-            whist[h, 2] = 0.0
-    F0 = -fn * n0 + ft0
-    F1 = -fn * n1 + ft1
-    F2 = -fn * n2 + ft2
+        whist[h, 0] = x0
+        whist[h, 1] = x1
+        whist[h, 2] = x2
     f[i, 0] += F0
     f[i, 1] += F1
     f[i, 2] += F2
