@@ -19,7 +19,8 @@ from pysim.contacts.law import pair_force
 from pysim.contacts.partition import BLOCK, _zero_rows
 from pysim.contacts.reactions import (SEP, _finish_row, _no_reaction, _reaction, _slot,
                                       _store)
-from pysim.contacts.stats import _STATS, _note_overlap, block_totals, block_worst
+from pysim.contacts.stats import (_STATS, _note_overlap, add_virial, block_totals,
+                                  block_worst)
 from pysim.forces import (D_COH, END_BONDS, F_COH, GAMMA_N, GAMMA_T, K_N, K_T, MU,
                           elastic_energy)
 from pysim.jit import njit, pnjit, prange
@@ -179,15 +180,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
                 if stats:
                     blk[b, 0] += pe
                     blk[b, 1] += 1.0
-                    blk[b, 2] += d0 * F0
-                    blk[b, 3] += d0 * F1
-                    blk[b, 4] += d0 * F2
-                    blk[b, 5] += d1 * F0
-                    blk[b, 6] += d1 * F1
-                    blk[b, 7] += d1 * F2
-                    blk[b, 8] += d2 * F0
-                    blk[b, 9] += d2 * F1
-                    blk[b, 10] += d2 * F2
+                    add_virial(blk, b, d0, d1, d2, F0, F1, F2)
             _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter)
     if stats:
         if worst is not None and not ends:

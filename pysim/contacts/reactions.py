@@ -128,6 +128,22 @@ def _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, scatter):
 
 
 @inline_njit
+def _finish_rows(i, hi, k1, istart, f, torque, s0, s1, s2, q0, q1, q2, solo, own):
+    """Finish the rows below ``hi`` whose pairs end with pair ``k1`` (:func:`_finish_row`,
+    the sums restarting at zero after each): returns the next row and its sums so far."""
+    while i < hi and istart[i + 1] <= k1:
+        _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or own[i])
+        s0 = 0.0
+        s1 = 0.0
+        s2 = 0.0
+        q0 = 0.0
+        q1 = 0.0
+        q2 = 0.0
+        i += 1
+    return i, s0, s1, s2, q0, q1, q2
+
+
+@inline_njit
 def _reaction_sum(i, jstart, jk, fr, by_pair, zero):
     """The stored reactions on particle ``i`` (force, torque), summed from zero in pair
     order: its records in ``fr`` are those of its pairs with ``by_pair``, else of its

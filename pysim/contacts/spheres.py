@@ -9,8 +9,9 @@ import numpy as np
 from pysim.contacts.law import contact_law, normal_part
 from pysim.contacts.partition import (BLOCK, _close_part, _part_flags, _zero_rows,
                                       part_bounds)
-from pysim.contacts.reactions import _finish_row, _reaction, _store_chunk
-from pysim.contacts.stats import _STATS, _note_overlap, block_totals, block_worst
+from pysim.contacts.reactions import _finish_rows, _reaction, _store_chunk
+from pysim.contacts.stats import (_STATS, _note_overlap, add_virial, block_totals,
+                                  block_worst)
 from pysim.forces import D_COH, F_COH, GAMMA_N, GAMMA_T, K_N, K_T, MU, elastic_energy
 from pysim.jit import njit, pnjit, prange
 
@@ -213,15 +214,9 @@ def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torqu
     for m in range(mc):
         k = kk[m]
         uk = np.uint64(k)  # unsigned: no negative-index wraparound
-        while istart[i + 1] <= k:
-            _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or own[i])
-            s0 = 0.0
-            s1 = 0.0
-            s2 = 0.0
-            q0 = 0.0
-            q1 = 0.0
-            q2 = 0.0
-            i += 1
+        # the rows before pair k's are complete (all lie below hi)
+        i, s0, s1, s2, q0, q1, q2 = _finish_rows(i, hi, k, istart, f, torque, s0, s1, s2,
+                                                 q0, q1, q2, solo, own)
         F0 = S[np.uint64(_F * CAP + m)]
         F1 = S[np.uint64((_F + 1) * CAP + m)]
         F2 = S[np.uint64((_F + 2) * CAP + m)]
@@ -261,24 +256,9 @@ def _sphere_scatter(k0, k1, i, hi, pj, istart, hist, law, kn, friction, f, torqu
             d0 = S[np.uint64(_D * CAP + m)]
             d1 = S[np.uint64((_D + 1) * CAP + m)]
             d2 = S[np.uint64((_D + 2) * CAP + m)]
-            blk[b, 2] += d0 * F0
-            blk[b, 3] += d0 * F1
-            blk[b, 4] += d0 * F2
-            blk[b, 5] += d1 * F0
-            blk[b, 6] += d1 * F1
-            blk[b, 7] += d1 * F2
-            blk[b, 8] += d2 * F0
-            blk[b, 9] += d2 * F1
-            blk[b, 10] += d2 * F2
-    while i < hi and istart[i + 1] <= k1:  # the rows that end with the chunk
-        _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or own[i])
-        s0 = 0.0
-        s1 = 0.0
-        s2 = 0.0
-        q0 = 0.0
-        q1 = 0.0
-        q2 = 0.0
-        i += 1
+            add_virial(blk, b, d0, d1, d2, F0, F1, F2)
+    i, s0, s1, s2, q0, q1, q2 = _finish_rows(i, hi, k1, istart, f, torque, s0, s1, s2,
+                                             q0, q1, q2, solo, own)
     return i, s0, s1, s2, q0, q1, q2, nl
 
 

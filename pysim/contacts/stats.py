@@ -31,6 +31,21 @@ def _note_overlap(blk, b, delta, ri, rj, k):
             blk[b, _WORST_K] = k + 1.0
 
 
+@inline_njit
+def add_virial(blk, b, d0, d1, d2, F0, F1, F2):
+    """Add a pair's virial ``d (x) F`` (centre separation ``d``, force ``F`` on ``j``) to
+    block ``b``'s nine virial columns."""
+    blk[b, 2] += d0 * F0
+    blk[b, 3] += d0 * F1
+    blk[b, 4] += d0 * F2
+    blk[b, 5] += d1 * F0
+    blk[b, 6] += d1 * F1
+    blk[b, 7] += d1 * F2
+    blk[b, 8] += d2 * F0
+    blk[b, 9] += d2 * F1
+    blk[b, 10] += d2 * F2
+
+
 @njit
 def block_worst(blk, worst):
     """The largest overlap fraction over the blocks and the first pair where it occurs,
