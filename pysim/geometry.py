@@ -29,6 +29,19 @@ def _clamp(v, lo, hi):
     return v
 
 
+@inline_njit
+def _clamped_pairs(s, t, b, d, e, ha, hb):
+    """The two candidates of a clamped closest-point problem: ``s`` clamped, ``t``
+    solved for it and clamped, ``s`` solved again; and the same from ``t`` clamped."""
+    s1 = _clamp(s, -ha, ha)
+    t1 = _clamp(b * s1 + e, -hb, hb)
+    s1 = _clamp(b * t1 - d, -ha, ha)
+    t2 = _clamp(t, -hb, hb)
+    s2 = _clamp(b * t2 - d, -ha, ha)
+    t2 = _clamp(b * s2 + e, -hb, hb)
+    return s1, t1, s2, t2
+
+
 @njit
 def closest_params(r0, r1, r2, ua0, ua1, ua2, ha, ub0, ub1, ub2, hb):
     """Scalar core of :func:`segment_closest`: ``r = c_a - c_b`` and the directions as
@@ -61,12 +74,7 @@ def closest_params(r0, r1, r2, ua0, ua1, ua2, ha, ub0, ub1, ub2, hb):
     if -ha <= s <= ha and -hb <= t <= hb:
         return s, t
     # clamp s and re-solve t (then s); clamp t and re-solve s (then t); keep the better
-    s1 = _clamp(s, -ha, ha)
-    t1 = _clamp(b * s1 + e, -hb, hb)
-    s1 = _clamp(b * t1 - d, -ha, ha)
-    t2 = _clamp(t, -hb, hb)
-    s2 = _clamp(b * t2 - d, -ha, ha)
-    t2 = _clamp(b * s2 + e, -hb, hb)
+    s1, t1, s2, t2 = _clamped_pairs(s, t, b, d, e, ha, hb)
     q1 = _dist2s(r0, r1, r2, ua0, ua1, ua2, ub0, ub1, ub2, s1, t1)
     q2 = _dist2s(r0, r1, r2, ua0, ua1, ua2, ub0, ub1, ub2, s2, t2)
     if q1 <= q2:
@@ -98,12 +106,7 @@ def closest_select(r0, r1, r2, ua0, ua1, ua2, ha, ub0, ub1, ub2, hb):
     s = (b * e - d) / q
     t = (e - b * d) / q
     inside = (-ha <= s) & (s <= ha) & (-hb <= t) & (t <= hb)
-    s1 = _clamp(s, -ha, ha)
-    t1 = _clamp(b * s1 + e, -hb, hb)
-    s1 = _clamp(b * t1 - d, -ha, ha)
-    t2 = _clamp(t, -hb, hb)
-    s2 = _clamp(b * t2 - d, -ha, ha)
-    t2 = _clamp(b * s2 + e, -hb, hb)
+    s1, t1, s2, t2 = _clamped_pairs(s, t, b, d, e, ha, hb)
     first = (_dist2s(r0, r1, r2, ua0, ua1, ua2, ub0, ub1, ub2, s1, t1)
              <= _dist2s(r0, r1, r2, ua0, ua1, ua2, ub0, ub1, ub2, s2, t2))
     s_out = s if inside else (s1 if first else s2)

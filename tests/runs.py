@@ -47,3 +47,12 @@ def start_mid_run(case_path, data, out) -> subprocess.Popen:
             break
         time.sleep(0.05)
     return proc
+
+
+def prepared(tmp_path_factory, name, case):
+    """``(validated case, folder)``: a fresh folder ``name`` holding the case's initial
+    state, ``init.data``, for the engines to start from."""
+    d = tmp_path_factory.mktemp(name)
+    case = validate_case(case)
+    write_initial(case, d / "init.data")
+    return case, d

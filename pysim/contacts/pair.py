@@ -83,12 +83,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
             wi0, wi1, wi2 = omega[i, 0], omega[i, 1], omega[i, 2]
             ri = radius[i]
             hi = half[i]
-            s0 = 0.0
-            s1 = 0.0
-            s2 = 0.0
-            q0 = 0.0
-            q1 = 0.0
-            q2 = 0.0
+            s0 = s1 = s2 = q0 = q1 = q2 = 0.0
             for k in range(istart[i], istart[i + 1]):
                 j = pj[k]
                 rj = radius[j]

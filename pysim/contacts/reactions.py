@@ -133,12 +133,7 @@ def _finish_rows(i, hi, k1, istart, f, torque, s0, s1, s2, q0, q1, q2, solo, own
     the sums restarting at zero after each): returns the next row and its sums so far."""
     while i < hi and istart[i + 1] <= k1:
         _finish_row(i, f, torque, s0, s1, s2, q0, q1, q2, solo or own[i])
-        s0 = 0.0
-        s1 = 0.0
-        s2 = 0.0
-        q0 = 0.0
-        q1 = 0.0
-        q2 = 0.0
+        s0 = s1 = s2 = q0 = q1 = q2 = 0.0
         i += 1
     return i, s0, s1, s2, q0, q1, q2
 

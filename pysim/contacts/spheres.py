@@ -280,12 +280,7 @@ def _sphere_part(bl, bh, nt, x, v, omega, radius, b0, b1, b2, p0, p1, p2, pi, pj
         lo = b * BLOCK
         hi = min(n, lo + BLOCK)
         i = lo
-        s0 = 0.0
-        s1 = 0.0
-        s2 = 0.0
-        q0 = 0.0
-        q1 = 0.0
-        q2 = 0.0
+        s0 = s1 = s2 = q0 = q1 = q2 = 0.0
         k0 = istart[lo]
         k_end = istart[hi]
         while True:

@@ -12,6 +12,7 @@ import yaml
 from analysis.io import RunData
 from analysis.summary import analyse_deposit
 from pysim.initial import write_initial
+from tests.runs import prepared
 from tests.cases import DEP_SMALL, deposit_with
 from workflows import engines
 from rodcase.case import validate_case
@@ -19,10 +20,7 @@ from rodcase.case import validate_case
 
 @pytest.fixture(scope="module")
 def dep_case(tmp_path_factory):
-    d = tmp_path_factory.mktemp("deplmp")
-    case = validate_case(DEP_SMALL)
-    write_initial(case, d / "init.data")
-    return case, d
+    return prepared(tmp_path_factory, "deplmp", DEP_SMALL)
 
 
 def phi_deposit(run_dir):

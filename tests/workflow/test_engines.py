@@ -9,7 +9,7 @@ import pytest
 
 from analysis.io import RunData
 from analysis.stress import pressure
-from pysim.initial import write_initial
+from tests.runs import prepared
 from tests.cases import ENGINE_COMPRESS, changed
 from tests.conftest import needs_liggghts
 from workflows import engines
@@ -42,10 +42,7 @@ def check_common_format(run_dir):
 
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):
-    d = tmp_path_factory.mktemp("tiny")
-    case = validate_case(ENGINE_COMPRESS)
-    write_initial(case, d / "init.data")
-    return case, d
+    return prepared(tmp_path_factory, "tiny", ENGINE_COMPRESS)
 
 
 @pytest.mark.engines

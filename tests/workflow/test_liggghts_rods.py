@@ -14,7 +14,7 @@ import pytest
 from analysis.io import RunData
 from analysis.summary import analyse_settled, settled_window
 from analysis.frame import Frame
-from pysim.initial import write_initial
+from tests.runs import prepared
 from tests.cases import SETTLE_RODS, changed
 from tests.conftest import needs_liggghts
 from workflows import engines
@@ -28,9 +28,7 @@ G = 10.0
 def bed(tmp_path_factory):
     if shutil.which("liggghts") is None:
         pytest.skip("LIGGGHTS is not installed")
-    d = tmp_path_factory.mktemp("ligsettle")
-    case = validate_case(SETTLE_RODS)
-    write_initial(case, d / "init.data")
+    case, d = prepared(tmp_path_factory, "ligsettle", SETTLE_RODS)
     summary = engines.run("liggghts", case, d / "init.data", d / "run", timeout=300)
     return case, d / "run", summary
 

@@ -21,6 +21,7 @@ from analysis.summary import analyse_tapping
 from pysim.initial import write_initial
 from pysim.protocols.tapping import plan
 from tests.conftest import needs_liggghts
+from tests.runs import prepared
 from tests.cases import TAP, TAP_D as D
 from workflows import engines
 from rodcase.case import validate_case
@@ -71,9 +72,7 @@ def tapped(tmp_path_factory):
     sphere dump kept as ``work/spheres.dump``."""
     if shutil.which("liggghts") is None:
         pytest.skip("LIGGGHTS is not installed")
-    d = tmp_path_factory.mktemp("ligtap")
-    case = validate_case(TAP)
-    write_initial(case, d / "init.data")
+    case, d = prepared(tmp_path_factory, "ligtap", TAP)
     tap = engines.ADAPTERS[TAP_KEY]
 
     def keep_spheres(work, c, data):  # the sphere dump, before it becomes rods

@@ -4,19 +4,15 @@ step; the CLI writes its samples and refuses what it cannot run."""
 import pandas as pd
 import pytest
 
-from pysim.initial import write_initial
 from pysim.io import read_particle_data
+from tests.runs import prepared
 from tests.cases import TAP
-from rodcase.case import validate_case
 from workflows.scripts import tap_trajectories as tt
 
 
 @pytest.fixture(scope="module")
 def small(tmp_path_factory):
-    d = tmp_path_factory.mktemp("taptraj")
-    case = validate_case(TAP)
-    write_initial(case, d / "init.data")
-    return case, d
+    return prepared(tmp_path_factory, "taptraj", TAP)
 
 
 def test_first_tap_converges_with_the_time_step(small):

@@ -10,8 +10,8 @@ import yaml
 
 from analysis.io import RunData
 from analysis.summary import analyse_tapping
-from pysim.initial import write_initial
 from pysim.protocols.tapping import plan
+from tests.runs import prepared
 from tests.cases import TAP, TAP_D as D
 from workflows import engines
 from rodcase.case import validate_case
@@ -28,10 +28,7 @@ def observables(case, run_dir):
 
 @pytest.fixture(scope="module")
 def tap_case(tmp_path_factory):
-    d = tmp_path_factory.mktemp("taplmp")
-    case = validate_case(TAP)
-    write_initial(case, d / "init.data")
-    return case, d
+    return prepared(tmp_path_factory, "taplmp", TAP)
 
 
 @pytest.mark.engines

@@ -15,7 +15,7 @@ from analysis.summary import (TIDY_COLUMNS, analyse_compression, analyse_deposit
                               analyse_growth, analyse_jammed, analyse_settled, analyse_tapping,
                               problems, tidy)
 from rodcase.files import atomic_write_text
-from rodcase.case import ConfigError, load_case
+from workflows.scripts import case_or_none
 from workflows.engines import settles
 
 #: provenance columns copied from run.json into every result row
@@ -66,10 +66,8 @@ def main(argv=None) -> int:
     ap.add_argument("--observables", required=True, type=Path)
     ap.add_argument("--curves", required=True, type=Path)
     a = ap.parse_args(argv)
-    try:
-        case = load_case(a.case)
-    except ConfigError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+    case = case_or_none(a.case)
+    if case is None:
         return 2
     record = json.loads((a.run / "run.json").read_text())
     if record.get("status") != "ok":

@@ -83,7 +83,7 @@ def summary_line(df: pd.DataFrame) -> str:
 def main(argv=None) -> int:
     from pysim.io import read_particle_data
     from rodcase.files import atomic_write_text
-    from rodcase.case import ConfigError, load_case
+    from workflows.scripts import case_or_none
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("case", type=Path,
@@ -93,10 +93,8 @@ def main(argv=None) -> int:
     ap.add_argument("--taps", type=int, default=10)
     ap.add_argument("--out", type=Path, required=True, help="samples (CSV)")
     a = ap.parse_args(argv)
-    try:
-        case = load_case(a.case)
-    except ConfigError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+    case = case_or_none(a.case)
+    if case is None:
         return 2
     if case["protocol"]["name"] != "tapping":
         print(f"error: {a.case} runs protocol {case['protocol']['name']!r}, not 'tapping'",
