@@ -52,6 +52,11 @@ OBSERVABLE_CONDITIONS = {
     "z_j": {"rattlers": "removed", "side_contacts": "one"},
     "z_j_bonds": {"rattlers": "removed", "side_contacts": "two_bonds"},
     "z_j_with_rattlers": {"rattlers": "counted", "side_contacts": "one"},
+    # the vibrational modes (workflows/scripts/modes.py): the backbone's Hessian, a side
+    # contact as two end bonds
+    **{name: {"rattlers": "removed", "side_contacts": "two_bonds"} for name in (
+        "mode_fraction_low", "mode_fraction_middle", "mode_fraction_high",
+        "omega_below_gap_exponent", "omega_low_exponent", "omega_middle_exponent")},
 }
 OUTPUT_COLUMNS = ["id", "paper", "where", "study", "kind", "engine", "observable", *POINT,
                   "layer", *CONDITION_COLUMNS, "paper_value", "paper_uncertainty",
