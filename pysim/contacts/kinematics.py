@@ -68,6 +68,15 @@ def end_bond(d0, d1, d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj, k):
 
 
 @inline_njit
+def normal_overlap(d0, d1, d2, dist2, rs):
+    """Unit normal ``n = d / |d|`` of a sphere pair at separation ``d`` (``|d|^2 =
+    dist2``), the overlap ``delta = rs - |d|`` (``rs = R_i + R_j``) and ``|d|``."""
+    dist = np.sqrt(dist2)
+    inv = 1.0 / dist
+    return d0 * inv, d1 * inv, d2 * inv, rs - dist, dist
+
+
+@inline_njit
 def contact_motion(g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, ri, rj, vi0, vi1, vi2, wi0,
                    wi1, wi2, vj0, vj1, vj2, wj0, wj1, wj2):
     """Normal, overlap and relative motion at the contact of a pair within reach: gap

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from pysim.contacts.kinematics import normal_overlap
 from pysim.contacts.law import contact_law, normal_part
 from pysim.contacts.partition import (BLOCK, _close_part, _part_flags, _zero_rows,
                                       part_bounds)
@@ -125,12 +126,8 @@ def _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
             d1 = S[np.uint64((_D + 1) * CAP + m)]
             d2 = S[np.uint64((_D + 2) * CAP + m)]
             rs = S[np.uint64(_RI * CAP + m)] + S[np.uint64(_RJ * CAP + m)]
-            dist = np.sqrt(S[np.uint64(_DIST2 * CAP + m)])
-            inv = 1.0 / dist
-            n0 = d0 * inv
-            n1 = d1 * inv
-            n2 = d2 * inv
-            delta = rs - dist
+            n0, n1, n2, delta, dist = normal_overlap(d0, d1, d2,
+                                                     S[np.uint64(_DIST2 * CAP + m)], rs)
             dv0 = S[np.uint64(_VI * CAP + m)] - S[np.uint64(_VJ * CAP + m)]
             dv1 = S[np.uint64((_VI + 1) * CAP + m)] - S[np.uint64((_VJ + 1) * CAP + m)]
             dv2 = S[np.uint64((_VI + 2) * CAP + m)] - S[np.uint64((_VJ + 2) * CAP + m)]
@@ -155,12 +152,7 @@ def _sphere_laws(S, mc, law, kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt):
         vj0 = S[np.uint64(_VJ * CAP + m)]
         vj1 = S[np.uint64((_VJ + 1) * CAP + m)]
         vj2 = S[np.uint64((_VJ + 2) * CAP + m)]
-        dist = np.sqrt(S[np.uint64(_DIST2 * CAP + m)])
-        inv = 1.0 / dist
-        n0 = d0 * inv
-        n1 = d1 * inv
-        n2 = d2 * inv
-        delta = rs - dist
+        n0, n1, n2, delta, dist = normal_overlap(d0, d1, d2, S[np.uint64(_DIST2 * CAP + m)], rs)
         vn = (vi0 - vj0) * n0 + (vi1 - vj1) * n1 + (vi2 - vj2) * n2
         S[np.uint64(_DELTA * CAP + m)] = delta
         ar = ri - 0.5 * delta  # contact point c = ar n from x_i, e = c - d
