@@ -195,6 +195,29 @@ def modes_of(sim, case: dict, step: int, metric: str = "paper") -> tuple[pd.Data
 ENERGIES = (1e-14, 1e-12)
 
 
+def band_sizes(omega2: np.ndarray) -> list[int]:
+    """Sizes of a stable state's bands, to follow up its energy ladder: the modes below
+    the widest gap, then the low and middle bands of the three-band split."""
+    zero = ZERO * float(np.abs(omega2).max())
+    two, three = am.bands(omega2, 2, zero), am.bands(omega2, 3, zero)
+    return [int((two == 0).sum()), int((three == 0).sum()), int((three == 1).sum())]
+
+
+def band_frequencies(omega2: np.ndarray, sizes) -> list[float]:
+    """Mean frequencies of the bands of :func:`band_sizes` in a state's spectrum
+    (:func:`analysis.modes.band_means`): below the gap, low, middle."""
+    zero = ZERO * float(np.abs(omega2).max())
+    return [*am.band_means(omega2, sizes[:1], zero), *am.band_means(omega2, sizes[1:], zero)]
+
+
+def _write_csv(df: pd.DataFrame, path: Path, **kw) -> None:
+    """``df`` to ``path`` through a temporary file beside it (never half written)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    df.to_csv(tmp, index=False, **kw)
+    tmp.replace(path)
+
+
 def frequency_exponents(energies, means: np.ndarray) -> dict:
     """Exponents ``x`` of ``omega_band ~ (U/L^2)^x`` by least squares in log-log over a
     stable state and its compressions: ``energies`` (one per state) and ``means`` (state
@@ -290,7 +313,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     from tqdm import tqdm
 
-    rows, per_mode, tables, ladder = [], [], {}, []
+    rows, per_mode, tables, ladder, rungs = [], [], {}, [], {}
     for run in tqdm(a.runs, desc="modes", unit="state"):
         record = json.loads((run / "run.json").read_text())
         if record.get("status") != "ok" or not record.get("converged", False):
@@ -300,45 +323,31 @@ def main(argv=None) -> int:
             continue
         table, summary = stable_state_modes(run, a.metric)
         variant, seed = run.parent.parent.name, run.parent.name
-        steps = [summary]
-        per_mode.append(table.assign(variant=variant, seed=seed,
-                                     energy_density=summary["energy_density"]))
-        zero = ZERO * float(table.omega2.abs().max())
-        two = am.bands(table.omega2.to_numpy(), 2, zero)
-        three = am.bands(table.omega2.to_numpy(), 3, zero)
-        sizes = [(two == 0).sum(), (three == 0).sum(), (three == 1).sum()]
-        means = [[*am.band_means(table.omega2, sizes[:1], zero),
-                  *am.band_means(table.omega2, sizes[1:], zero)]]
+        steps, states = [summary], [table]
         for target in a.energies:
             case, sim, step = compressed_state(run, target)
             above, row = modes_of(sim, case, step, a.metric)
             steps.append(row)
-            per_mode.append(above.assign(variant=variant, seed=seed,
-                                         energy_density=row["energy_density"]))
-            top = ZERO * float(above.omega2.abs().max())
-            means.append([*am.band_means(above.omega2, sizes[:1], top),
-                          *am.band_means(above.omega2, sizes[1:], top)])
-        ladder += [{"variant": variant, "seed": seed, **r} for r in steps]
+            states.append(above)
+        sizes = band_sizes(table.omega2.to_numpy())
         if len(steps) > 2:
-            summary.update(frequency_exponents([r["energy_density"] for r in steps],
-                                               np.array(means)))
+            summary.update(frequency_exponents(
+                [r["energy_density"] for r in steps],
+                np.array([band_frequencies(t.omega2.to_numpy(), sizes) for t in states])))
+        ladder += [{"variant": variant, "seed": seed, **r} for r in steps]
+        for k, (t, r) in enumerate(zip(states, steps)):
+            t = t.assign(variant=variant, seed=seed, energy_density=r["energy_density"])
+            per_mode.append(t)
+            rungs.setdefault(variant, {}).setdefault(k, []).append(t)  # seeds pooled
         rows.append({"variant": variant, "seed": seed, **summary})
         tables.setdefault(variant, []).append(table)
     if not rows:
         raise SystemExit(f"no finished run among {len(a.runs)} to take modes of")
-    a.table.parent.mkdir(parents=True, exist_ok=True)
-    tmp = a.table.with_name(a.table.name + ".tmp")
-    pd.DataFrame(rows).to_csv(tmp, index=False)
-    tmp.replace(a.table)
-    if ladder:
-        path = a.table.with_name(a.table.stem + ".energies.csv")
-        tmp = path.with_name(path.name + ".tmp")
-        pd.DataFrame(ladder).to_csv(tmp, index=False)
-        tmp.replace(path)
-    modes_path = a.table.with_name(a.table.stem + ".modes.csv.gz")
-    tmp = modes_path.with_name(modes_path.name + ".tmp")
-    pd.concat(per_mode).to_csv(tmp, index=False, compression="gzip")
-    tmp.replace(modes_path)
+    _write_csv(pd.DataFrame(rows), a.table)
+    _write_csv(pd.DataFrame(ladder), a.table.with_name(a.table.stem + ".energies.csv"))
+    _write_csv(pd.concat(per_mode), a.table.with_name(a.table.stem + ".modes.csv.gz"),
+               compression="gzip")
+
     def by_value(variant: str) -> tuple:  # alpha0.5 before alpha1, not after alpha0.25
         digits = "".join(ch for ch in variant if ch.isdigit() or ch == ".")
         try:
@@ -346,17 +355,11 @@ def main(argv=None) -> int:
         except ValueError:
             return (1, 0.0, variant)
 
-    rungs = {}
-    for table in per_mode:  # rung k of every seed pooled: the stable state is rung 0
-        for (variant, seed), g in table.groupby(["variant", "seed"]):
-            rungs.setdefault((variant, seed), []).append(g)
-    ladder = {}
-    for (variant, _), states in rungs.items():
-        for k, g in enumerate(states):
-            ladder.setdefault(variant, {}).setdefault(k, []).append(g)
-    ladder = {v: [pd.concat(by_rung[k]) for k in sorted(by_rung)]
-              for v, by_rung in ladder.items() if len(by_rung) > 1}
-    plot_modes({v: pd.concat(tables[v]) for v in sorted(tables, key=by_value)}, a.out, ladder)
+    # the density of states up the energy ladder: rung k of every seed pooled
+    ladder_tables = {v: [pd.concat(by_rung[k]) for k in sorted(by_rung)]
+                     for v, by_rung in rungs.items() if len(by_rung) > 1}
+    plot_modes({v: pd.concat(tables[v]) for v in sorted(tables, key=by_value)}, a.out,
+               ladder_tables)
     return 0
 
 
