@@ -620,6 +620,69 @@ def deposit_profiles(runs, out):
     _save(fig, out)
 
 
+def janssen_against_paper(panels, out):
+    """Janssen profiles against a paper's fits, one column per case: top, the trace of
+    the mean stress ``tr sigma = d p`` (compressive positive) in the case's units against
+    the depth ``x = h / W``, with each run's saturation fit ``sigma_m (1 - exp(-x / h_s))``
+    (thin); bottom, the same profiles over their own fitted ``sigma_m`` beside the paper's
+    ``1 - exp(-x / h_s)`` (black), which compares saturation depths when the units of
+    the stresses cannot be matched. The paper's ``sigma_m`` and ``h_s`` are printed.
+
+    ``panels``: dicts with ``title``, ``runs`` (dicts ``label``, ``engine``, ``x``,
+    ``trace``, ``fit`` (array or ``None``), ``sigma_m``, ``h_s`` (NaN without a
+    saturation fit)) and ``paper`` (``None`` or a dict ``sigma_m``, ``h_s``, ``label``).
+    """
+    if not panels:
+        message_figure(out, "no successful deposition run to draw: see failures.csv")
+        return
+    n = len(panels)
+    fig, axes = plt.subplots(2, n, figsize=(4.6 * n, 8.0), squeeze=False)
+    cmap = plt.get_cmap("tab10")
+    for col, panel in enumerate(panels):
+        top, shape = axes[0, col], axes[1, col]
+        x_max = 0.0
+        for i, r in enumerate(panel["runs"]):
+            color = cmap(i % 10)
+            ls = "-" if r["engine"] == "pysim" else ("--" if r["engine"] == "lammps" else ":")
+            x = np.asarray(r["x"], float)
+            x_max = max(x_max, float(np.nanmax(x, initial=0.0)))
+            top.plot(r["trace"], x, color=color, ls=ls, marker=".", label=r["label"])
+            if r["fit"] is not None:
+                top.plot(r["fit"], x, color=color, ls=ls, lw=0.6)
+            if np.isfinite(r["sigma_m"]):
+                shape.plot(np.asarray(r["trace"], float) / r["sigma_m"], x, color=color,
+                           ls=ls, marker=".",
+                           label=f"{r['label']}: h_s/W = {r['h_s']:.2f}")
+        paper = panel["paper"]
+        if paper is not None:
+            xs = np.linspace(0.0, x_max if x_max > 0 else 3.0 * paper["h_s"], 200)
+            shape.plot(1.0 - np.exp(-xs / paper["h_s"]), xs, color="k", lw=1.4,
+                       label=f"{paper['label']}: h_s/W = {paper['h_s']:g}")
+            unmet = paper.get("unmet") or []
+            title = (f"{panel['title']}\npaper: sigma_m = {paper['sigma_m']:g} N/m, "
+                     f"h_s/W = {paper['h_s']:g}")
+            if unmet:
+                title += "\nconditions differ: " + "\n".join(unmet)
+            top.set_title(title, fontsize=7, color="k" if not unmet else "tab:red")
+        else:
+            top.set_title(f"{panel['title']}\nthe paper gives no fit here", fontsize=8)
+        top.ticklabel_format(axis="x", style="sci", scilimits=(-3, 4))
+        top.set_xlabel(r"trace of the mean stress $\mathrm{tr}\,\sigma$ (case units)")
+        shape.set_xlabel(r"$\mathrm{tr}\,\sigma / \sigma_m$ (each run its own fit)")
+        shape.axvline(1.0, color="grey", lw=0.6, ls=":")
+        if not any(np.isfinite(r["sigma_m"]) for r in panel["runs"]):
+            shape.text(0.5, 0.5, "no run saturates within its depth\n(no sigma_m to scale by)",
+                       transform=shape.transAxes, ha="center", fontsize=8, color="tab:red")
+        for ax in (top, shape):
+            ax.set_ylabel("depth  x = h / W")
+            ax.invert_yaxis()
+            ax.legend(fontsize=6)
+    fig.suptitle("Janssen saturation of the pressure against the paper's fits "
+                 "(solid pysim, dashed LAMMPS, dotted LIGGGHTS)", fontsize=9)
+    fig.tight_layout()
+    _save(fig, out)
+
+
 def contact_angle_distributions(groups, out, bins: int = 30):
     """``P(varphi)`` of the contact angle around the particle
     (:func:`analysis.contacts.contact_angles`), one panel per variant, engines overlaid.

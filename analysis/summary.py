@@ -505,6 +505,12 @@ def analyse_tapping(run_dir, **plan):
 STRESS_ELEMENT = 5.0
 
 
+def _no_saturation(tag: str) -> list[tuple[str, float, float]]:
+    """The Janssen rows of a profile without a saturation fit: NaN."""
+    names = [f"sigma_m_{tag}", f"h_s_{tag}"] + (["sigma_m_trace"] if tag == "p" else [])
+    return [(name, np.nan, np.nan) for name in names]
+
+
 def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density: float = 1.0,
                     base_wall_id: int | None = None):
     """Observables of a settled deposit in a box of ``width`` ``W`` (the last frame):
@@ -521,7 +527,8 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
       fit weighted by the slab stresses' standard errors (their spread over
       :data:`STRESS_COLUMNS` columns of the container,
       :func:`analysis.stress.slab_stress_errors`), and ``sigma_m_p``, ``h_s_p``
-      (unweighted); ``janssen_saturated`` 1 when the fitted ``h_s`` lies within the depth
+      (unweighted), and ``sigma_m_trace = d sigma_m_p``, the saturation value of the
+      trace of the mean stress (the quantity a 2-D paper may fit); ``janssen_saturated`` 1 when the fitted ``h_s`` lies within the depth
       of the data, else 0 and the fit values NaN (a straight profile fixes only the slope
       ``sigma_m / h_s``);
     * ``k_ratio``: ``sigma_hh / sigma_vv`` averaged over the lower half of the deposit;
@@ -579,7 +586,7 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
             fit = JanssenFit(form="saturation", width=width).compute(
                 prof.loc[use, "depth"], prof.loc[use, col], err)
         except (JanssenFitError, RuntimeError):
-            rows += [(f"sigma_m_{tag}", np.nan, np.nan), (f"h_s_{tag}", np.nan, np.nan)]
+            rows += _no_saturation(tag)
             prof[f"{col}_fit"] = np.nan
             continue
         x_max = float(prof.loc[use, "x"].max())
@@ -589,11 +596,13 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
         if not saturated:
             # a straight profile: sigma_m and h_s grow without bound together; only their
             # ratio (the slope) is determined, so no saturation values are reported
-            rows += [(f"sigma_m_{tag}", np.nan, np.nan), (f"h_s_{tag}", np.nan, np.nan)]
+            rows += _no_saturation(tag)
             prof[f"{col}_fit"] = np.nan
             continue
         rows += [(f"sigma_m_{tag}", float(fit.sigma_m), float(fit.sigma_m_err)),
                  (f"h_s_{tag}", float(fit.h_s), float(fit.h_s_err))]
+        if tag == "p":  # the trace is d times the pressure, so its fit scales the same
+            rows.append(("sigma_m_trace", d * float(fit.sigma_m), d * float(fit.sigma_m_err)))
         if tag == "vv":
             rows.append(("chi2_dof_vv", float(fit.chi2 / max(fit.dof, 1)), np.nan))
         prof[f"{col}_fit"] = janssen(prof["x"].clip(lower=0.0), fit.sigma_m, fit.h_s)

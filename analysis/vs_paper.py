@@ -219,6 +219,12 @@ def _differing(run: pd.Series, conds, observable: str) -> tuple[list[str], list[
     return bad, unchecked
 
 
+def unmet_conditions(terms: dict, ref) -> list[str]:
+    """The conditions of reference row ``ref`` that a run with case terms ``terms``
+    (:func:`workflows.vs_paper.case_terms`) fails, as ``"key (ours X, paper Y)"``."""
+    return _differing(pd.Series(terms), _conditions(ref), ref.observable)[0]
+
+
 def _fmt(x) -> str:
     if isinstance(x, (float, np.floating)):
         return f"{x:g}"

@@ -108,6 +108,8 @@ def test_smooth_walls_put_the_whole_weight_on_the_base(deposits):
     # the slab's particle-centre average: within 10 %; the box is wider than the
     # container, so this needs the container's cross-section)
     np.testing.assert_allclose(deep.apparent_mass, deep.mass_above, rtol=0.1)
+    # the trace's saturation value is d = 3 times the pressure's (NaN alike, unsaturated)
+    np.testing.assert_allclose(v["sigma_m_trace"], 3.0 * v["sigma_m_p"], equal_nan=True)
 
 
 def test_cohesion_makes_the_deposit_looser(deposits):

@@ -117,6 +117,7 @@ def get_final_output():
             out += [f"{RESULTS}/{study}/figures/sets.png", f"{RESULTS}/{study}/sets.csv"]
         elif study in deposit:
             out.append(f"{RESULTS}/{study}/figures/deposit.png")
+            out.append(f"{RESULTS}/{study}/figures/janssen.png")  # against the paper's fits
             if deposit_trend(study):  # deposits versus d = 1 + alpha or the Bond number
                 out.append(f"{RESULTS}/{study}/figures/trends.png")
         elif varying_parameters(CFG, study):

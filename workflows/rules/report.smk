@@ -270,6 +270,27 @@ rule plot_deposit:
         "{PYTHON} -m workflows.scripts.plot_deposit --out {output} {params.dirs} 2> {log}"
 
 
+rule plot_janssen:
+    input:
+        lambda wc: [
+            f"{d}/{name}"
+            for d in run_dirs(wc.study)
+            for name in ("curves.csv", "observables.csv", "run.json")
+        ],
+    output:
+        report(
+            f"{RESULTS}/{{study}}/figures/janssen.png",
+            caption="../report/janssen.rst",
+            category="Against the papers",
+        ),
+    log:
+        f"{RESULTS}/{{study}}/figures/janssen.log",
+    params:
+        dirs=lambda wc: " ".join(run_dirs(wc.study)),
+    shell:
+        "{PYTHON} -m workflows.scripts.plot_janssen --out {output} {params.dirs} 2> {log}"
+
+
 rule plot_tapping:
     input:
         lambda wc: [
