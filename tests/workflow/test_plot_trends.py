@@ -134,3 +134,24 @@ def test_the_papers_values_ride_along_the_trend(tmp_path):
     assert all(p["label"].startswith("marschall2018") for p in pts)
     assert plot_trends.paper_points(tmp_path, study, "kappa", ["phi_j"]) == []
     assert plot_trends.paper_points(tmp_path, "no_such_study", "alpha", ["phi_j"]) == []
+
+
+def test_the_jamming_limits_ride_on_the_phi_j_panel(tmp_path):
+    """Polydisperse spheres along sigma get Baranau and Tsigelnitskiy's phi_LT, phi_RCP
+    and phi_GCP (Table 4) on the phi_J panel, each under its own name."""
+    import yaml
+
+    from workflows.studies import load_config
+
+    cfg = load_config("workflows/config/random_packings_paper.yaml")
+    key, case = next((k, c) for k, c in cfg["_cases"].items()
+                     if k[0] == "random_packings_paper_poly")
+    d = tmp_path / key[0] / key[1] / f"seed{key[2]}"
+    d.mkdir(parents=True)
+    (d / "case.yaml").write_text(yaml.safe_dump(case))
+    pts = plot_trends.paper_points(tmp_path, key[0], "sigma", ["phi_j"])
+    assert {p["observable"] for p in pts} == {"phi_j"}
+    by = {(p["label"], p["x"]): p["y"] for p in pts}
+    assert by[("baranau2014 phi_rcp", 0.3)] == pytest.approx(0.6676)
+    assert by[("baranau2014 phi_gcp", 0.25)] == pytest.approx(0.6716)
+    assert by[("baranau2014 phi_lt", 0.15)] == pytest.approx(0.6426)

@@ -78,8 +78,16 @@ def references(parameter: str, dimension: int, alphas=(), values=()) -> dict:
                        theory.thin_rod_limit(10.0, a[thin]))], **deposit}
 
 
+#: published densities that are not our observable but belong on its panel: Baranau and
+#: Tsigelnitskiy's limits of the jamming density, from the lowest (phi_LT, fastest
+#: compressions) through phi_RCP to phi_GCP (slowest, before crystallisation), against
+#: which a compression's phi_J at its own rate is read
+ON_PANEL = {"phi_lt": "phi_j", "phi_rcp": "phi_j", "phi_gcp": "phi_j"}
+
+
 def paper_points(results: Path, study: str, parameter: str, observables) -> list[dict]:
-    """The papers' values of ``observables`` along ``parameter`` (a point parameter of
+    """The papers' values of ``observables`` (and of those :data:`ON_PANEL` puts on their
+    panels, labelled with their own names) along ``parameter`` (a point parameter of
     ``references/``, e.g. ``alpha``) at the other parameters of the study's cases (read
     from ``<results>/<study>/<case>/seed<k>/case.yaml``), for :func:`analysis.plots.trends`.
     The papers' conditions may differ from ours (``vs_paper.csv`` says where)."""
@@ -98,10 +106,14 @@ def paper_points(results: Path, study: str, parameter: str, observables) -> list
         # the aspect ratio alpha = L/D and the paper's d = 1 + alpha move together
         free = ("alpha", "d") if parameter in ("alpha", "d") else (parameter,)
         refs = reference_rows(case, REFERENCES, free=free)
-        refs = refs[refs.observable.isin(observables)
-                    & pd.to_numeric(refs[parameter], errors="coerce").notna()]
+        panel = refs.observable.map(lambda o: o if o in observables else ON_PANEL.get(o))
+        refs = refs[panel.isin(observables)
+                    & pd.to_numeric(refs[parameter], errors="coerce").notna()
+                    & pd.to_numeric(refs["value"], errors="coerce").notna()]
         rows.update({r.id: r for r in refs.itertuples()})
-    return [{"observable": r.observable, "label": f"{r.paper} ({r.where.split(';')[0]})",
+    return [{"observable": ON_PANEL.get(r.observable, r.observable),
+             "label": (f"{r.paper} {r.observable}" if r.observable in ON_PANEL
+                       else f"{r.paper} ({r.where.split(';')[0]})"),
              "x": float(getattr(r, parameter)), "y": float(r.value),
              "yerr": float(r.uncertainty) if pd.notna(r.uncertainty) else 0.0}
             for r in rows.values()]
