@@ -155,3 +155,23 @@ def test_the_jamming_limits_ride_on_the_phi_j_panel(tmp_path):
     assert by[("baranau2014 phi_rcp", 0.3)] == pytest.approx(0.6676)
     assert by[("baranau2014 phi_gcp", 0.25)] == pytest.approx(0.6716)
     assert by[("baranau2014 phi_lt", 0.15)] == pytest.approx(0.6426)
+
+
+def test_rods_get_the_papers_contact_and_caging_numbers(tmp_path):
+    """3-D rods along alpha: Wouterse et al.'s <C> (rattlers counted) on the
+    z_j_with_rattlers panel and their caging numbers on the z_j panel."""
+    import yaml
+
+    from workflows.studies import load_config
+
+    cfg = load_config("workflows/config/random_packings_paper.yaml")
+    key, case = next((k, c) for k, c in cfg["_cases"].items()
+                     if c["particles"]["aspect_ratio"] == 1.5)
+    d = tmp_path / key[0] / key[1] / f"seed{key[2]}"
+    d.mkdir(parents=True)
+    (d / "case.yaml").write_text(yaml.safe_dump(case))
+    pts = plot_trends.paper_points(tmp_path, key[0], "alpha", plot_trends.OBSERVABLES)
+    c = {p["x"]: p["y"] for p in pts if p["observable"] == "z_j_with_rattlers"}
+    assert c[1.5] == pytest.approx(9.5)
+    assert any(p["observable"] == "z_j" and p["label"] == "wouterse caging_number"
+               for p in pts)

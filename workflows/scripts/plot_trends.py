@@ -11,7 +11,7 @@ import pandas as pd
 
 from analysis import plots
 
-OBSERVABLES = ["phi_j", "z_j", "z_j_bonds", "s_nematic_j", "sqrt_n_s2", "sqrt_n_s4",
+OBSERVABLES = ["phi_j", "z_j", "z_j_with_rattlers", "z_j_bonds", "s_nematic_j", "sqrt_n_s2", "sqrt_n_s4",
                "fraction_side_side", "fraction_tip_side", "fraction_tip_tip"]
 #: deposits (analysis.summary.analyse_deposit): packing fraction of the filled part, mean
 #: angle between spines and the horizontal (degrees), stress ratio K = sigma_hh / sigma_vv
@@ -78,11 +78,12 @@ def references(parameter: str, dimension: int, alphas=(), values=()) -> dict:
                        theory.thin_rod_limit(10.0, a[thin]))], **deposit}
 
 
-#: published densities that are not our observable but belong on its panel: Baranau and
+#: published values that are not our observable but belong on its panel: Baranau and
 #: Tsigelnitskiy's limits of the jamming density, from the lowest (phi_LT, fastest
 #: compressions) through phi_RCP to phi_GCP (slowest, before crystallisation), against
-#: which a compression's phi_J at its own rate is read
-ON_PANEL = {"phi_lt": "phi_j", "phi_rcp": "phi_j", "phi_gcp": "phi_j"}
+#: which a compression's phi_J at its own rate is read; Wouterse et al.'s caging numbers
+#: beside ours and the jammed contact numbers
+ON_PANEL = {"phi_lt": "phi_j", "phi_rcp": "phi_j", "phi_gcp": "phi_j", "caging_number": "z_j"}
 
 
 def paper_points(results: Path, study: str, parameter: str, observables) -> list[dict]:
