@@ -2,9 +2,14 @@
 
 All three share :func:`forces` (contacts, walls, gravity, drag) and
 :func:`maybe_rebuild` (the Verlet list). Arrays are those of :class:`pysim.state.State`
-plus ``half = L/2`` and ``r_int = R + L/2 + d_c/2`` (interaction radii), the pair list
-:class:`Pairs` (:mod:`pysim.neighbors`) with its per-pair tangential springs ``hist``, and
-the wall arrays of :mod:`pysim.walls`. ``sys`` is a float array of the scalars below.
+plus ``half = L/2`` and ``r_int = R + L/2 + d_c/2`` (interaction radii); three tuples of
+arrays travel together: ``pairs`` (:data:`PAIR_ARRAYS`, the Verlet list of
+:mod:`pysim.neighbors` with its per-pair tangential springs), ``ref`` (:data:`REF_ARRAYS`,
+the state at the list build) and ``walls`` (:data:`WALL_ARRAYS`, :mod:`pysim.walls`).
+The scalars are two records (:mod:`pysim.records`): ``params``, the parameters (drag,
+gravity, strain and growth rates, skin, threads; read only), and ``cache``, the cache the
+kernels write (the list build, the motion bound, the threads' bookkeeping, the largest
+overlap).
 
 Every per-particle loop and the contact loop run on Numba threads (``prange``); each
 thread writes only the particles or pairs it owns and global sums are taken over fixed
@@ -43,39 +48,27 @@ from pysim.forces import END_BONDS
 from pysim.jit import inline_njit, njit, pnjit, prange
 from pysim.neighbors import (ROW_ROOM, build_list, motion_bound, spine_separations,
                              stale_by_bound, transfer_rows)
+from pysim.records import WORST_UNKNOWN
 from pysim.rotation import axes, axis_from, axis_of, free_rotate, top_rotation
 from pysim.walls import wall_forces
 
 SQRT_HALF = np.sqrt(0.5)
 
-# indices into the 'sys' scalar array
-(GAMMA_BG, GAMMA_ROT, GX, GY, GZ, EPS_X, EPS_Y, EPS_Z, GROWTH, SKIN, RINT_BUILD, K_D,
- RC_BUILD, HALF_BUILD, RODS, DIM2, SEP_SIGMA, SEP_SHRINK, PARTS, SLOT_PARTS, WORST_OVERLAP,
- WORST_PAIR, OWN_PARTS) = range(23)
-SYS_SIZE = 23
-#: ``sys[WORST_PAIR]`` when the last force evaluation with statistics could not tell the
-#: largest overlap (``end_bonds`` rods): :func:`pysim.contacts.worst_overlap` must
-WORST_UNKNOWN = -2.0
-
-#: The pair arrays, passed and returned in this order by the kernels: the Verlet list
-#: (:func:`pysim.neighbors.build_list`: ``pi``, ``pj``, ``istart``, ``jstart``, ``jk``),
-#: the tangential springs ``hist`` (npairs, 3; (npairs, 0) without friction) and the
-#: per-pair scratch ``fj`` (:data:`pysim.contacts.PAIR_SCRATCH` rows of at least npairs
-#: values: the stored reactions of :func:`pysim.contacts.pair_pass` and of the threads'
-#: shared particles, and each pair's spine distance at the build, row
-#: :data:`pysim.contacts.SEP`). ``sys[SEP_SIGMA]``, ``sys[SEP_SHRINK]`` hold the motion
-#: bound since the build (:func:`pysim.neighbors.motion_bound`), set by
-#: :func:`maybe_rebuild`; ``SEP_SIGMA = 0`` turns the skipping of pairs out of reach off.
-#: ``sys[PARTS]``: the threads the kernels run on, the parts of the contact pass
-#: (:func:`forces`); ``sys[SLOT_PARTS]``: the parts for which the reaction slots of the
-#: shared particles in ``fj`` hold zero (:func:`pysim.contacts.clear_slots`; 0 after a
-#: list build). ``sys[WORST_OVERLAP]``, ``sys[WORST_PAIR]``: the largest overlap as a
-#: fraction of the smaller diameter and its pair (``-inf``, -1: none) at the last
-#: :func:`forces` with ``stats`` (:func:`pysim.contacts.block_worst`), for the blow-up
-#: check, or ``WORST_UNKNOWN``. ``sys[OWN_PARTS]``: the parts for which the ``own`` flags
-#: that :func:`forces` keeps (:func:`pysim.contacts.own_flags`) are this list's (0 after a
-#: list build, and whenever the flags array is new).
+#: The pair arrays, passed and returned as one tuple in this order by the kernels: the
+#: Verlet list (:func:`pysim.neighbors.build_list`: ``pi``, ``pj``, ``istart``, ``jstart``,
+#: ``jk``), the tangential springs ``hist`` (npairs, 3; (npairs, 0) without friction) and
+#: the per-pair scratch ``fj`` (:data:`pysim.contacts.PAIR_SCRATCH` rows of at least
+#: npairs values: the stored reactions of :func:`pysim.contacts.pair_pass` and of the
+#: threads' shared particles, and each pair's spine distance at the build, row
+#: :data:`pysim.contacts.SEP`, which the motion bound in ``cache`` refers to).
 PAIR_ARRAYS = ("pi", "pj", "istart", "jstart", "jk", "hist", "fj")
+#: The state at the last list build, one tuple: positions, axes (rods only, else (0, 3))
+#: and box, written by :func:`rebuild`; the motion bound is taken from them.
+REF_ARRAYS = ("x_ref", "u_ref", "box_ref")
+#: The walls, one tuple: the plane and cylinder rows (:mod:`pysim.walls`), the wall
+#: contact parameters (:func:`pysim.forces.contact_params`), the wall springs ``whist``
+#: and the force on each wall ``wall_force`` (written).
+WALL_ARRAYS = ("planes", "cyls", "wp", "whist", "wall_force")
 
 
 @njit
@@ -117,20 +110,22 @@ def max_of(a):
 
 
 @njit
-def rebuild(x, u, box, periodic, r_int, half, sys, old_istart, old_pj, old_hist, fj, x_ref,
-            u_ref, box_ref):
-    """A new pair list for the current state, carrying the tangential springs over.
-    Returns the pair arrays (:data:`PAIR_ARRAYS`)."""
+def rebuild(x, u, box, periodic, r_int, half, params, cache, pairs, ref):
+    """A new pair list for the current state, carrying the tangential springs over from
+    the old one (``pairs``); writes the build's state (``ref``, ``cache``). Returns the
+    new pair arrays (:data:`PAIR_ARRAYS`)."""
+    old_pj, old_istart, old_hist, fj = pairs[1], pairs[2], pairs[5], pairs[6]
+    x_ref, u_ref, box_ref = ref
     n = max(x.shape[0], 1)  # room per row in the build: 1.5 times the old mean row
     room = 3 * old_pj.shape[0] // (2 * n) + 2 if old_pj.shape[0] else ROW_ROOM
     # the spine-separation row of the pair scratch is rewritten below: the build's buffer
     scratch = fj[SEP].view(np.int32) if fj.shape[0] > SEP else np.empty(0, np.int32)
-    pi, pj, istart, jstart, jk = build_list(x, u, r_int, half, box, periodic, sys[SKIN], room,
+    pi, pj, istart, jstart, jk = build_list(x, u, r_int, half, box, periodic, params.skin, room,
                                             scratch)
     hist = transfer_rows(old_istart, old_pj, old_hist, istart, pj)
     if fj.shape[1] < pj.shape[0] or fj.shape[0] < PAIR_SCRATCH:  # scratch with 10 % to spare
         fj = np.empty((PAIR_SCRATCH, pj.shape[0] + pj.shape[0] // 10 + 16))
-    if sys[RODS] != 0.0:  # only the rod loop skips pairs by their separation
+    if params.rods:  # only the rod loop skips pairs by their separation
         spine_separations(x, u, half, box, periodic, pi, pj, fj[SEP])
     x_ref[:, :] = x
     if u_ref.shape[0] == u.shape[0]:
@@ -141,36 +136,35 @@ def rebuild(x, u, box, periodic, r_int, half, sys, old_istart, old_pj, old_hist,
     for i in range(x.shape[0]):
         rc = max(rc, r_int[i] - half[i])
         hm = max(hm, half[i])
-    sys[RINT_BUILD] = max_of(r_int)
-    sys[RC_BUILD] = 2.0 * rc
-    sys[HALF_BUILD] = hm
-    sys[SEP_SIGMA] = 1.0
-    sys[SEP_SHRINK] = 0.0
-    sys[SLOT_PARTS] = 0.0
-    sys[OWN_PARTS] = 0.0
+    cache.rint_build = max_of(r_int)
+    cache.rc_build = 2.0 * rc
+    cache.half_build = hm
+    cache.sep_sigma = 1.0
+    cache.sep_shrink = 0.0
+    cache.slot_parts = 0
+    cache.own_parts = 0
     return pi, pj, istart, jstart, jk, hist, fj
 
 
 @njit
-def maybe_rebuild(x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist,
-                  fj, x_ref, u_ref, box_ref, dl=None):
+def maybe_rebuild(x, u, box, periodic, r_int, half, params, cache, pairs, ref, dl=None):
     """Rebuild the pair list (carrying the tangential history) when an unlisted pair
     could come into contact (:func:`pysim.neighbors.list_is_stale`). Returns the pair
     arrays and whether it rebuilt. ``dl``: each particle's share of the motion bound,
     written here (:func:`pysim.neighbors.motion_bound`; zero after a build) for
     :func:`forces`."""
-    growth = max_of(r_int) / sys[RINT_BUILD] if sys[RINT_BUILD] > 0 else 1.0
+    x_ref, u_ref, box_ref = ref
+    growth = max_of(r_int) / cache.rint_build if cache.rint_build > 0 else 1.0
     sigma, shrink = motion_bound(x, x_ref, u, u_ref, half, box, box_ref, periodic,
-                                 sys[HALF_BUILD], growth, dl)
-    if not stale_by_bound(sigma, shrink, sys[RC_BUILD], sys[SKIN], growth):
-        sys[SEP_SIGMA] = sigma
-        sys[SEP_SHRINK] = shrink
-        return pi, pj, istart, jstart, jk, hist, fj, False
-    pi, pj, istart, jstart, jk, hist, fj = rebuild(x, u, box, periodic, r_int, half, sys,
-                                                   istart, pj, hist, fj, x_ref, u_ref, box_ref)
+                                 cache.half_build, growth, dl)
+    if not stale_by_bound(sigma, shrink, cache.rc_build, params.skin, growth):
+        cache.sep_sigma = sigma
+        cache.sep_shrink = shrink
+        return pairs, False
+    pairs = rebuild(x, u, box, periodic, r_int, half, params, cache, pairs, ref)
     if dl is not None:
         dl[:] = 0.0  # the state is the build's
-    return pi, pj, istart, jstart, jk, hist, fj, True
+    return pairs, True
 
 
 @pnjit
@@ -185,65 +179,67 @@ def _body(f, torque, v, omega, mass, gx, gy, gz, gb, gr):
 
 
 @njit
-def forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, jstart, jk, hist,
-           fj, law, cp, friction, planes, cyls, wp, wfriction, whist, wall_force, sys, t, dt,
-           f, torque, virial, stats, dl=None, own=None):
+def forces(x, v, omega, u, radius, half, mass, box, periodic, pairs, law, cp, friction, walls,
+           wfriction, params, cache, t, dt, f, torque, virial, stats, dl=None, own=None):
     """Overwrite ``f``, ``torque`` with pair contacts, walls, gravity ``m g``, drag
     ``-gamma_bg v`` and ``-gamma_rot omega`` (added in that order). With ``stats`` also
-    the virial and the largest overlap (``sys[WORST_OVERLAP]``, ``sys[WORST_PAIR]``), and
-    returns ``(elastic energy, pair contacts, wall contacts)``; without, the virial and
-    the overlap are left as they were and the first two are zero. ``dl``: the particles'
-    shares of the motion bound that :func:`maybe_rebuild` wrote with ``sys[SEP_SIGMA]``
-    (rods skip the pairs it keeps out of reach; the same forces). ``own``: n flags kept
-    from call to call, the shared particles of the parts (``sys[OWN_PARTS]``), else they
-    are found at every call."""
+    the virial and the largest overlap (``cache.worst``), and returns ``(elastic energy,
+    pair contacts, wall contacts)``; without, the virial and the overlap are left as they
+    were and the first two are zero. ``wfriction``: the walls keep springs (``whist``).
+    ``dl``: the particles' shares of the motion bound that :func:`maybe_rebuild` wrote
+    with ``cache.sep_sigma`` (rods skip the pairs it keeps out of reach; the same forces).
+    ``own``: n flags kept from call to call, the shared particles of the parts
+    (``cache.own_parts``), else they are found at every call."""
+    pi, pj, istart, jstart, jk, hist, fj = pairs
+    planes, cyls, wp, whist, wall_force = walls
     # the sphere and rod passes write complete pair forces on any number of threads (one
     # part of the rows per thread); the general pass does on one thread only (scatter),
     # else reduce_pass adds the stored reactions. The same bits either way.
-    parts = int(sys[PARTS])
+    parts = params.parts
     scatter = True
-    ends = sys[RODS] != 0.0 and cp[END_BONDS] != 0.0
-    if not ends and parts > 1 and sys[SLOT_PARTS] != parts:
-        clear_slots(istart, jstart, jk, fj, parts, sys[RODS] == 0.0)
-        sys[SLOT_PARTS] = parts
+    ends = params.rods and cp[END_BONDS] != 0.0
+    if not ends and parts > 1 and cache.slot_parts != parts:
+        clear_slots(istart, jstart, jk, fj, parts, not params.rods)
+        cache.slot_parts = parts
     ownv = own if own is not None else np.empty(0, np.bool_)
-    own_ok = sys[OWN_PARTS] == parts
+    own_ok = cache.own_parts == parts
     if ownv.shape[0] == x.shape[0] and not ends:
-        sys[OWN_PARTS] = parts  # the pass writes them now if they were not
-    worst = sys[WORST_OVERLAP:WORST_PAIR + 1]  # a view: the passes write the overlap there
+        cache.own_parts = parts  # the pass writes them now if they were not
+    worst = cache.worst  # a view: the passes write the overlap there
     if ends:
         scatter = parts == 1
         pe, nc = pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, jk,
                            hist, law, cp, friction, dt, True, f, torque, fj, stats, virial,
-                           sys[SEP_SIGMA], sys[SEP_SHRINK], scatter)
-        sys[SLOT_PARTS] = 0.0  # it wrote every slot
+                           cache.sep_sigma, cache.sep_shrink, scatter)
+        cache.slot_parts = 0  # it wrote every slot
         if stats:
-            sys[WORST_PAIR] = WORST_UNKNOWN
-    elif sys[RODS] != 0.0:
+            worst[1] = WORST_UNKNOWN
+    elif params.rods:
         pe, nc = rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart,
                           jk, hist, law, cp, friction, dt, f, torque, fj, stats, virial,
-                          sys[SEP_SIGMA], sys[SEP_SHRINK], parts, worst, dl, ownv, own_ok)
+                          cache.sep_sigma, cache.sep_shrink, parts, worst, dl, ownv, own_ok)
     else:
         pe, nc = sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk,
                              hist, law, cp, friction, dt, f, torque, fj, stats, virial, parts,
                              worst, ownv, own_ok)
-    gx, gy, gz = sys[GX], sys[GY], sys[GZ]
-    gb = sys[GAMMA_BG]
-    gr = sys[GAMMA_ROT]
+    g = params.gravity
+    gx, gy, gz = g[0], g[1], g[2]
+    gb = params.gamma_bg
+    gr = params.gamma_rot
     body = gx != 0.0 or gy != 0.0 or gz != 0.0 or gb != 0.0 or gr != 0.0
-    walls = planes.shape[0] + cyls.shape[0] > 0
-    if not scatter or (body and not walls):
+    any_walls = planes.shape[0] + cyls.shape[0] > 0
+    if not scatter or (body and not any_walls):
         reduce_pass(f, torque, jstart, fj, v, omega, mass, gx, gy, gz, gb, gr,
-                    body and not walls, scatter)
+                    body and not any_walls, scatter)
     nw = 0
-    if walls:
+    if any_walls:
         no_ij = np.empty((0, 2), np.int64)
         no_rec = np.empty((0, 10))
         nw = wall_forces(x, v, omega, u, radius, half, planes, cyls, t, law, wp, wfriction,
                          whist, dt, f, torque, wall_force, False, no_ij, no_rec)
         if body:
             _body(f, torque, v, omega, mass, gx, gy, gz, gb, gr)
-    if sys[DIM2] != 0.0:
+    if params.dim2:
         _planar_forces(f, torque)
     return pe, nc, nw
 
@@ -622,9 +618,8 @@ RETURN_PAIRS = 1 << 13
 
 @njit
 def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia, box,
-                 periodic, pi, pj, istart, jstart, jk, hist, fj, x_ref, u_ref, box_ref, law, cp,
-                 friction, planes, cyls, wp, wfriction, whist, wall_force, sys, clock, dt, nsteps,
-                 virial, dl, own):
+                 periodic, pairs, ref, law, cp, friction, walls, wfriction, params, cache, clock,
+                 dt, nsteps, virial, dl, own):
     """Advance ``nsteps`` velocity-Verlet steps (see the module doc).
 
     ``clock = (t_seg, s_seg, step0)``: the time after step ``k`` of this call is
@@ -637,28 +632,29 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
     would hold three lists at once). ``dl``: scratch of n values for the particles' shares
     of the motion bound (:func:`maybe_rebuild`), or none (empty): the rods' contact pass
     then skips by the largest share alone. ``own``: n flags kept for :func:`forces` (or
-    none). Returns ``(pair arrays (7), elastic energy, pair contacts, wall contacts,
-    rebuilds, steps done)``.
+    none). Returns ``(pairs, elastic energy, pair contacts, wall contacts, rebuilds, steps
+    done)``.
     """
     h = 0.5 * dt
     inv = np.empty((x.shape[0], 3))  # from mass and inertia at every call: never stale
     inverses(mass, inertia, inv)
-    parts = int(sys[PARTS])
-    lanes = sys[RODS] != 0.0  # rods turn on SIMD lanes
+    parts = params.parts
+    lanes = params.rods  # rods turn on SIMD lanes
     pe = 0.0
     nc = 0
     nw = 0
     rebuilds = 0
     scale = np.ones(3)
     deform = False
+    rate = params.strain_rate
     for k in range(3):
-        if sys[EPS_X + k] != 0.0:
-            scale[k] = np.exp(sys[EPS_X + k] * dt)
+        if rate[k] != 0.0:
+            scale[k] = np.exp(rate[k] * dt)
             deform = True
-    dim2 = sys[DIM2] != 0.0
+    dim2 = params.dim2
     sc = 1.0
-    if sys[GROWTH] != 0.0:
-        sc = np.exp(sys[GROWTH] * dt)
+    if params.growth != 0.0:
+        sc = np.exp(params.growth * dt)
     # mass grows with the volume (area in 2-D), inertia with mass times length squared
     sc3 = sc * sc if dim2 else sc * sc * sc
     sc5 = sc3 * sc * sc
@@ -672,15 +668,14 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
             _half_and_half(x, v, q, u, omega, f, torque, mass, inertia, inv, radius, half, r_int,
                            box, periodic, h, dt, dim2, scale, deform, sc, sc3, sc5, parts,
                            lanes)
-        pi, pj, istart, jstart, jk, hist, fj, rebuilt = maybe_rebuild(
-            x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,
-            u_ref, box_ref, dl)
-        last = (rebuilt and pj.shape[0] >= RETURN_PAIRS) or k == nsteps - 1
+        pairs, rebuilt = maybe_rebuild(x, u, box, periodic, r_int, half, params, cache, pairs,
+                                       ref, dl)
+        last = (rebuilt and pairs[1].shape[0] >= RETURN_PAIRS) or k == nsteps - 1
         if rebuilt:
             rebuilds += 1
-        pe, nc, nw = forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart,
-                            jstart, jk, hist, fj, law, cp, friction, planes, cyls, wp, wfriction,
-                            whist, wall_force, sys, t, dt, f, torque, virial, last, dl, own)
+        pe, nc, nw = forces(x, v, omega, u, radius, half, mass, box, periodic, pairs, law, cp,
+                            friction, walls, wfriction, params, cache, t, dt, f, torque, virial,
+                            last, dl, own)
         for kk in range(3):
             box[kk] *= scale[kk]
         if last:
@@ -689,7 +684,7 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
     if nsteps > 0:
         _second_half(x, v, omega, u, f, torque, mass, inertia, inv, radius, half, r_int, h, scale,
                      deform, sc, sc3, sc5)
-    return pi, pj, istart, jstart, jk, hist, fj, pe, nc, nw, rebuilds, done
+    return pairs, pe, nc, nw, rebuilds, done
 
 
 @pnjit
@@ -753,23 +748,22 @@ def _heun_correct(x, x0, f0, f, t0, torque, v, omega, q, q0, u, mass, inertia, m
 
 @njit
 def heun_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia, msize, box,
-               periodic, pi, pj, istart, jstart, jk, hist, fj, x_ref, u_ref, box_ref, law, cp,
-               planes, cyls, wp, wall_force, sys, clock, dt, nsteps, virial):
+               periodic, pairs, ref, law, cp, walls, params, cache, clock, dt, nsteps, virial):
     """Advance ``nsteps`` overdamped Heun steps (see the module doc). ``msize`` is the
-    particle area (2-D) or volume (3-D); ``sys[K_D]`` the substrate drag ``k_d``; the box
-    contracts at ``sys[EPS_*]`` (``-kappa``). ``v``/``omega`` return the last mobility
-    velocities (non-affine). Returns ``(pair arrays (7), elastic energy, contacts,
-    rebuilds)``."""
+    particle area (2-D) or volume (3-D); ``params.k_d`` the substrate drag ``k_d``; the box
+    contracts at ``params.strain_rate`` (``-kappa``). No tangential springs, of pairs or
+    walls. ``v``/``omega`` return the last mobility velocities (non-affine). Returns
+    ``(pairs, elastic energy, contacts, rebuilds)``."""
     n = x.shape[0]
     x0 = np.empty((n, 3))
     q0 = np.empty((n, 4))
     f0 = np.empty((n, 3))
     t0_ = np.empty((n, 3))
     scale = np.empty(3)
+    rate = params.strain_rate
     for k in range(3):
-        scale[k] = np.exp(sys[EPS_X + k] * dt)
-    kd = sys[K_D]
-    whist = np.zeros((0, 3))
+        scale[k] = np.exp(rate[k] * dt)
+    kd = params.k_d
     pe = 0.0
     nc = 0
     rebuilds = 0
@@ -782,27 +776,22 @@ def heun_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
             box[k] *= scale[k]
         axes(q, u)
         wrap(x, box, periodic)
-        pi, pj, istart, jstart, jk, hist, fj, rebuilt = maybe_rebuild(
-            x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,
-            u_ref, box_ref)
+        pairs, rebuilt = maybe_rebuild(x, u, box, periodic, r_int, half, params, cache, pairs, ref)
         if rebuilt:
             rebuilds += 1
-        forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart, jstart, jk, hist,
-               fj, law, cp, False, planes, cyls, wp, False, whist, wall_force, sys, t + dt, dt, f,
-               torque, virial, False)
+        forces(x, v, omega, u, radius, half, mass, box, periodic, pairs, law, cp, False, walls,
+               False, params, cache, t + dt, dt, f, torque, virial, False)
         _heun_correct(x, x0, f0, f, t0_, torque, v, omega, q, q0, u, mass, inertia, msize, kd,
                       scale, dt)
         wrap(x, box, periodic)
         t = clock[0] + (clock[2] + kk + 1 - clock[1]) * dt
-        pi, pj, istart, jstart, jk, hist, fj, rebuilt = maybe_rebuild(
-            x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,
-            u_ref, box_ref)
+        pairs, rebuilt = maybe_rebuild(x, u, box, periodic, r_int, half, params, cache, pairs, ref)
         if rebuilt:
             rebuilds += 1
-        pe, nc, _ = forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart,
-                           jstart, jk, hist, fj, law, cp, False, planes, cyls, wp, False, whist,
-                           wall_force, sys, t, dt, f, torque, virial, kk == nsteps - 1)
-    return pi, pj, istart, jstart, jk, hist, fj, pe, nc, rebuilds
+        pe, nc, _ = forces(x, v, omega, u, radius, half, mass, box, periodic, pairs, law, cp,
+                           False, walls, False, params, cache, t, dt, f, torque, virial,
+                           kk == nsteps - 1)
+    return pairs, pe, nc, rebuilds
 
 
 #: per-block sums of :func:`_fire_sums`
@@ -901,16 +890,14 @@ def _fire_mix(x, v, omega, f, torque, alpha, vn, wn, fnorm, tnorm, dt):
 
 @njit
 def fire_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia, box,
-               periodic, pi, pj, istart, jstart, jk, hist, fj, x_ref, u_ref, box_ref, law, cp,
-               planes, cyls, wp, wall_force, sys, fire, nsteps, f_tol, virial):
+               periodic, pairs, ref, law, cp, walls, params, cache, fire, nsteps, f_tol, virial):
     """Up to ``nsteps`` FIRE iterations at fixed box; stops early once every force and
-    torque is below ``f_tol`` (in magnitude). ``fire`` is the float array
-    ``[dt, alpha, n_positive, dt_max, dt_min]``, updated in place so that calls can be
-    chained. Returns ``(pair arrays (7), elastic energy, contacts, iterations, max |F|,
-    max |tau|)``."""
+    torque is below ``f_tol`` (in magnitude). No tangential springs, of pairs or walls.
+    ``fire`` is the float array ``[dt, alpha, n_positive, dt_max, dt_min]``, updated in
+    place so that calls can be chained. Returns ``(pairs, elastic energy, contacts,
+    iterations, max |F|, max |tau|)``."""
     n = x.shape[0]
     f_inc, f_dec, alpha0, f_alpha, n_delay = 1.1, 0.5, 0.1, 0.99, 5
-    whist = np.zeros((0, 3))
     part = np.zeros(((n + BLOCK - 1) // BLOCK, _FIRE_SUMS))
     inv = np.empty((n, 3))
     inverses(mass, inertia, inv)
@@ -946,10 +933,7 @@ def fire_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia,
                   np.sqrt(tn2), dt)
         _rotate_free(q, u, omega, inertia, inv, half, dt)
         wrap(x, box, periodic)
-        pi, pj, istart, jstart, jk, hist, fj, _ = maybe_rebuild(
-            x, u, box, periodic, r_int, half, sys, pi, pj, istart, jstart, jk, hist, fj, x_ref,
-            u_ref, box_ref)
-        pe, nc, _ = forces(x, v, omega, u, radius, half, mass, box, periodic, pi, pj, istart,
-                           jstart, jk, hist, fj, law, cp, False, planes, cyls, wp, False, whist,
-                           wall_force, sys, 0.0, dt, f, torque, virial, True)
-    return pi, pj, istart, jstart, jk, hist, fj, pe, nc, it, fmax, tmax
+        pairs, _ = maybe_rebuild(x, u, box, periodic, r_int, half, params, cache, pairs, ref)
+        pe, nc, _ = forces(x, v, omega, u, radius, half, mass, box, periodic, pairs, law, cp,
+                           False, walls, False, params, cache, 0.0, dt, f, torque, virial, True)
+    return pairs, pe, nc, it, fmax, tmax

@@ -30,6 +30,7 @@ from scipy.optimize import minimize
 
 from pysim import integrators as itg
 from pysim.jit import njit
+from pysim.records import copy_record
 from pysim.rotation import quaternions_from_axes
 
 
@@ -46,7 +47,7 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
     if sim.model.friction or sim.model.f_coh > 0:
         raise ValueError(f"L-BFGS minimises the elastic energy: friction (mu = {sim.model.mu}) "
                          f"and cohesion (f_coh = {sim.model.f_coh}) must be 0; use FIRE")
-    if sim.n_walls or np.any(sim.sys[itg.GX:itg.GZ + 1] != 0.0):
+    if sim.n_walls or np.any(sim.params.gravity != 0.0):
         raise ValueError("L-BFGS minimises the pair-contact energy only: this simulation has "
                          "walls or gravity; use FIRE")
     if f_tol <= 0 or max_iter < 1:
@@ -57,9 +58,9 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
     scale = sim.half[rods][:, None]
     scale_r = np.ascontiguousarray(scale[:, 0])
     nx = n * dim
-    free = (itg.GAMMA_BG, itg.GAMMA_ROT, *range(itg.EPS_X, itg.GROWTH + 1))
-    saved = sim.sys[list(free)].copy()
-    sim.sys[list(free)] = 0.0
+    saved = copy_record(sim.params)
+    for name in FREE_PARAMS:
+        sim.params[name] = 0.0
     s.v[:] = 0.0
     s.omega[:] = 0.0
     last = {"z": None, "fmax": np.inf, "tmax": np.inf}
@@ -69,8 +70,7 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
     def energy(zs):
         set_coordinates(zs, h, s.x, s.u, rods, scale_r, dim, s.box, s.periodic, w_norm)
         sim._set_pairs(itg.maybe_rebuild(s.x, s.u, s.box, s.periodic, sim.r_int, sim.half,
-                                         sim.sys, *sim._pairs(), sim.x_ref, sim.u_ref,
-                                         sim.box_ref)[:7])
+                                         sim.params, sim.cache, sim._pairs(), sim._ref())[0])
         sim.compute_forces()
         grad = np.empty_like(zs)
         fmax, tmax = gradient(sim.f, sim.torque, s.u, rods, w_norm, scale_r, dim, grad)
@@ -113,12 +113,17 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
     finally:
         if len(rods):  # forces need the spines only; the quaternions follow them once
             s.q[rods] = quaternions_from_axes(s.u[rods])
-        sim.sys[list(free)] = saved
+        for name in FREE_PARAMS:
+            sim.params[name] = saved[name]
         s.v[:] = 0.0
         s.omega[:] = 0.0
     sim._check("L-BFGS")
     return iterations, last["fmax"], last["tmax"]
 
+
+#: the parameters that L-BFGS sets to zero while it runs (they would add forces without an
+#: energy) and restores after
+FREE_PARAMS = ("gamma_bg", "gamma_rot", "strain_rate", "growth")
 
 #: L-BFGS' first moves tried in turn while its line search gives up within
 #: :data:`GAVE_UP` iterations: one unit of length with the energy scaled to a gradient of

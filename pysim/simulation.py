@@ -26,6 +26,7 @@ from pysim.contacts import PAIR_SCRATCH, REC_COLUMNS, pair_forces, worst_overlap
 from pysim.forces import END_BONDS, KEEP_SPRING, LAW_IDS, NO_TENSION, contact_params
 from pysim.jit import get_threads
 from pysim.neighbors import row_starts, transpose
+from pysim.records import WORST_UNKNOWN, copy_record, new_cache, new_params
 from pysim.state import State
 from pysim.walls import CYL_COLUMNS, PLANE_COLUMNS, wall_forces
 
@@ -160,6 +161,10 @@ class Simulation:
     (:mod:`pysim.walls`); ``skin`` Verlet skin (default 0.2 of the largest diameter);
     ``max_overlap`` the overlap (fraction of the smaller diameter) that counts as a
     blow-up.
+
+    The kernels' scalars are two records (:mod:`pysim.records`): ``params``, the
+    parameters (drags, gravity, strain and growth rates, skin, threads), and ``cache``,
+    what the kernels keep from call to call (the list build, the largest overlap).
     """
 
     def __init__(self, state: State, model: ContactModel, dt: float, gravity=(0.0, 0.0, 0.0),
@@ -189,13 +194,14 @@ class Simulation:
         g = np.asarray(gravity, dtype=np.float64).reshape(3)
         if s.dimension == 2 and g[2] != 0:
             raise ValueError(f"gravity {tuple(g)} has a z component in a 2-D run; use (0, -g, 0)")
-        self.sys = np.zeros(itg.SYS_SIZE)
-        self.sys[itg.GAMMA_BG] = model.gamma_bg
-        self.sys[itg.GAMMA_ROT] = model.gamma_rot
-        self.sys[itg.GX:itg.GZ + 1] = g
-        self.sys[itg.SKIN] = self.skin
-        self.sys[itg.RODS] = 1.0 if np.any(self.half > 0) else 0.0
-        self.sys[itg.DIM2] = 1.0 if s.dimension == 2 else 0.0
+        self.params = new_params()
+        self.params.gamma_bg = model.gamma_bg
+        self.params.gamma_rot = model.gamma_rot
+        self.params.gravity = g
+        self.params.skin = self.skin
+        self.params.rods = bool(np.any(self.half > 0))
+        self.params.dim2 = s.dimension == 2
+        self.cache = new_cache()
         for k in range(3):
             if s.periodic[k] and s.box[k] < 2.0 * (dmax + model.d_coh + self.skin):
                 raise ValueError(
@@ -216,7 +222,7 @@ class Simulation:
         self.pj = np.zeros(0, np.int32)
         self.hist = np.zeros((0, 3 if model.friction else 0))
         self.x_ref = s.x.copy()
-        self.u_ref = s.u.copy() if self.sys[itg.RODS] else np.zeros((0, 3))
+        self.u_ref = s.u.copy() if self.params.rods else np.zeros((0, 3))
         self.box_ref = s.box.copy()
         self._new_scratch()
         self._index_pairs()
@@ -257,13 +263,22 @@ class Simulation:
                     f"t_c = {t_c:.3g} of the lightest pair; use dt <= {t_c / 10:.3g} "
                     "(t_c/50 is usual)")
 
-    # the pair arrays travel through the kernels in the order of itg.PAIR_ARRAYS; pi, pj
-    # and hist are attributes (checkpoints store them, the index arrays are derived)
+    # the pair arrays travel through the kernels as one tuple in the order of
+    # itg.PAIR_ARRAYS; pi, pj and hist are attributes (checkpoints store them, the index
+    # arrays are derived)
     def _pairs(self) -> tuple:
         return (self.pi, self.pj, self._istart, self._jstart, self._jk, self.hist, self._fj)
 
     def _set_pairs(self, p):
         self.pi, self.pj, self._istart, self._jstart, self._jk, self.hist, self._fj = p
+
+    def _ref(self) -> tuple:
+        """The state at the last list build (itg.REF_ARRAYS)."""
+        return (self.x_ref, self.u_ref, self.box_ref)
+
+    def _walls(self) -> tuple:
+        """The wall arrays (itg.WALL_ARRAYS)."""
+        return (self.planes, self.cyls, self._wp, self.whist, self.wall_force)
 
     def _new_scratch(self):
         """The per-particle scratch the steps keep (new at construction and after a
@@ -272,11 +287,11 @@ class Simulation:
         rods' contact pass alone (empty otherwise; infinite, no pair skipped by it, until
         then); ``_own``, the threads' shared-particle flags that
         :func:`pysim.integrators.forces` keeps, found again at the first step
-        (``sys[OWN_PARTS] = 0``)."""
-        one_bond = self.sys[itg.RODS] and not self._cp[END_BONDS]
+        (``cache.own_parts = 0``)."""
+        one_bond = self.params.rods and not self._cp[END_BONDS]
         self._dl = np.full(self.state.n if one_bond else 0, np.inf)
         self._own = np.zeros(self.state.n, np.bool_)
-        self.sys[itg.OWN_PARTS] = 0.0
+        self.cache.own_parts = 0
 
     def _index_pairs(self):
         """Derive the row starts, the transposed index and the reaction scratch from
@@ -290,32 +305,31 @@ class Simulation:
 
     def _rebuild(self):
         s = self.state
-        self._set_pairs(itg.rebuild(s.x, s.u, s.box, s.periodic, self.r_int, self.half, self.sys,
-                                    self._istart, self.pj, self.hist, self._fj, self.x_ref,
-                                    self.u_ref, self.box_ref))
+        self._set_pairs(itg.rebuild(s.x, s.u, s.box, s.periodic, self.r_int, self.half,
+                                    self.params, self.cache, self._pairs(), self._ref()))
         self.rebuilds += 1
 
     def compute_forces(self):
         """Forces, torques and virial of the current state (half-step velocities are
         whatever ``state.v`` holds)."""
         s = self.state
-        self.sys[itg.SEP_SIGMA] = 0.0  # the state may have changed since the motion bound
+        self.cache.sep_sigma = 0.0  # the state may have changed since the motion bound
         self._sync_threads()
         self._pe, self._nc, self._nw = itg.forces(
             s.x, s.v, s.omega, s.u, s.radius, self.half, s.mass, s.box, s.periodic,
-            *self._pairs(), self.model.law_id, self._cp, self.model.friction, self.planes,
-            self.cyls, self._wp, self._wfriction, self.whist, self.wall_force, self.sys, s.time,
-            self.dt, self.f, self.torque, self.virial, True)
+            self._pairs(), self.model.law_id, self._cp, self.model.friction, self._walls(),
+            self._wfriction, self.params, self.cache, s.time, self.dt, self.f, self.torque,
+            self.virial, True)
 
     def _sync_threads(self):
         """Tell the kernels how many threads they run on (the contact pass cuts its rows
         into as many parts; the same bits for any number)."""
-        self.sys[itg.PARTS] = float(get_threads())
+        self.params.parts = get_threads()
 
     def _check(self, what: str):
         """Raise :class:`BlowUpError` on non-finite positions or velocities, or on an
         overlap above ``max_overlap`` at the last force evaluation (the largest overlap
-        comes with the forces, ``sys[WORST_OVERLAP]``: a pass over the pairs of its own
+        comes with the forces, ``cache.worst``: a pass over the pairs of its own
         took as long as most of a step of 10^6 rods)."""
         s = self.state
         if not itg.all_finite(s.x, s.v):
@@ -325,10 +339,10 @@ class Simulation:
                 f"{what}: non-finite positions or velocities at step {s.step} for particles "
                 f"(0-based) {ids[:10].tolist()}; reduce dt (now {self.dt:g}) or the driving rate")
         if self._nc:
-            frac, k = self.sys[itg.WORST_OVERLAP], int(self.sys[itg.WORST_PAIR])
-            if k == itg.WORST_UNKNOWN:
+            frac, k = self.cache.worst[0], int(self.cache.worst[1])
+            if k == WORST_UNKNOWN:
                 frac, k = worst_overlap(s.x, s.u, s.radius, self.half, s.box, s.periodic,
-                                        self.pi, self.pj, self.sys[itg.RODS] != 0.0)
+                                        self.pi, self.pj, bool(self.params.rods))
             if k >= 0:
                 if frac > self.max_overlap:
                     a, b = int(self.pi[k]), int(self.pj[k])
@@ -347,18 +361,17 @@ class Simulation:
         s = self.state
         rate = np.broadcast_to(np.asarray(strain_rate, dtype=np.float64), (3,)).copy()
         rate[~s.periodic] = 0.0
-        self.sys[itg.EPS_X:itg.EPS_Z + 1] = rate
-        self.sys[itg.GROWTH] = growth_rate
+        self.params.strain_rate = rate
+        self.params.growth = growth_rate
         self._sync_threads()
         left = int(nsteps)
         while left > 0:  # a call returns after a list rebuild: the old list is freed here
-            (*pairs, self._pe, self._nc, self._nw, nreb, done) = itg.verlet_chunk(
+            (pairs, self._pe, self._nc, self._nw, nreb, done) = itg.verlet_chunk(
                 s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half,
-                self.r_int, s.mass, s.inertia, s.box, s.periodic, *self._pairs(), self.x_ref,
-                self.u_ref, self.box_ref, self.model.law_id, self._cp, self.model.friction,
-                self.planes, self.cyls, self._wp, self._wfriction, self.whist,
-                self.wall_force, self.sys, self._clock(), self.dt, left, self.virial,
-                self._dl, self._own)
+                self.r_int, s.mass, s.inertia, s.box, s.periodic, self._pairs(), self._ref(),
+                self.model.law_id, self._cp, self.model.friction, self._walls(),
+                self._wfriction, self.params, self.cache, self._clock(), self.dt, left,
+                self.virial, self._dl, self._own)
             self._set_pairs(pairs)
             self.rebuilds += nreb
             self._advance_clock(done)
@@ -378,17 +391,17 @@ class Simulation:
         rate = np.where(s.periodic, -float(kappa), 0.0)
         if s.dimension == 2:
             rate[2] = 0.0
-        self.sys[itg.EPS_X:itg.EPS_Z + 1] = rate
-        self.sys[itg.K_D] = k_d
+        self.params.strain_rate = rate
+        self.params.k_d = k_d
         self._sync_threads()
         msize = s.mass / s.density
-        (*pairs, self._pe, self._nc, nreb) = itg.heun_chunk(
+        (pairs, self._pe, self._nc, nreb) = itg.heun_chunk(
             s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half, self.r_int,
-            s.mass, s.inertia, msize, s.box, s.periodic, *self._pairs(), self.x_ref, self.u_ref,
-            self.box_ref, self.model.law_id, self._cp, self.planes, self.cyls, self._wp,
-            self.wall_force, self.sys, self._clock(), self.dt, int(nsteps), self.virial)
+            s.mass, s.inertia, msize, s.box, s.periodic, self._pairs(), self._ref(),
+            self.model.law_id, self._cp, self._walls(), self.params, self.cache, self._clock(),
+            self.dt, int(nsteps), self.virial)
         self._set_pairs(pairs)
-        self.sys[itg.EPS_X:itg.EPS_Z + 1] = 0.0
+        self.params.strain_rate = 0.0
         self.rebuilds += nreb
         self._advance_clock(nsteps)
         self._check("overdamped Heun")
@@ -406,37 +419,35 @@ class Simulation:
                              f"got {check_every}")
         dt_max = 10.0 * self.dt if dt_max is None else dt_max
         fire = np.array([self.dt, 0.1, 0.0, dt_max, 0.02 * self.dt])
-        sys = self.sys.copy()
-        sys[itg.GAMMA_BG] = 0.0
-        sys[itg.GAMMA_ROT] = 0.0
-        sys[itg.EPS_X:itg.GROWTH + 1] = 0.0
+        # FIRE's parameters: no drag, strain or growth; the cache is the run's (a list
+        # that FIRE builds is the run's list from then on)
+        fire_params = copy_record(self.params)
+        fire_params.gamma_bg = 0.0
+        fire_params.gamma_rot = 0.0
+        fire_params.strain_rate = 0.0
+        fire_params.growth = 0.0
         s.v[:] = 0.0
         s.omega[:] = 0.0
-        saved_sys = self.sys
-        self.sys = sys
+        saved = self.params
+        self.params = fire_params
         done = 0
         try:
-            self.compute_forces()  # also sets sys[PARTS]
+            self.compute_forces()  # also sets fire_params.parts
             while True:
                 chunk = int(max_iter) - done if until is None else min(check_every,
                                                                        int(max_iter) - done)
-                (*pairs, self._pe, self._nc, it, fmax, tmax) = itg.fire_chunk(
+                (pairs, self._pe, self._nc, it, fmax, tmax) = itg.fire_chunk(
                     s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half,
-                    self.r_int, s.mass, s.inertia, s.box, s.periodic, *self._pairs(),
-                    self.x_ref, self.u_ref, self.box_ref, self.model.law_id, self._cp,
-                    self.planes, self.cyls, self._wp, self.wall_force, sys, fire, chunk,
-                    float(f_tol), self.virial)
+                    self.r_int, s.mass, s.inertia, s.box, s.periodic, self._pairs(),
+                    self._ref(), self.model.law_id, self._cp, self._walls(), fire_params,
+                    self.cache, fire, chunk, float(f_tol), self.virial)
                 self._set_pairs(pairs)
                 converged = fmax < f_tol and tmax < f_tol
                 done += int(it) if converged else chunk
                 if converged or done >= max_iter or (until is not None and until(self)):
                     break
         finally:
-            saved_sys[itg.RINT_BUILD:itg.RINT_BUILD + 1] = sys[itg.RINT_BUILD:itg.RINT_BUILD + 1]
-            saved_sys[itg.RC_BUILD:itg.HALF_BUILD + 1] = sys[itg.RC_BUILD:itg.HALF_BUILD + 1]
-            saved_sys[itg.WORST_OVERLAP:itg.WORST_PAIR + 1] = sys[itg.WORST_OVERLAP:
-                                                                  itg.WORST_PAIR + 1]
-            self.sys = saved_sys
+            self.params = saved
             s.v[:] = 0.0
             s.omega[:] = 0.0
         self._check("FIRE")
@@ -494,8 +505,8 @@ class Simulation:
         half = 0.5 * new.length
         self.half = np.concatenate([self.half, half])
         self.r_int = np.concatenate([self.r_int, new.radius + half + 0.5 * self.model.d_coh])
-        g = self.sys[itg.GX:itg.GZ + 1]
-        f = new.mass[:, None] * g[None, :] - self.sys[itg.GAMMA_BG] * new.v  # what forces() adds
+        g = self.params.gravity
+        f = new.mass[:, None] * g[None, :] - self.params.gamma_bg * new.v  # what forces() adds
         if s.dimension == 2:
             f[:, 2] = 0.0
         self.f = np.ascontiguousarray(np.concatenate([self.f, f]))
@@ -503,8 +514,8 @@ class Simulation:
         if self._wfriction:
             self.whist = np.concatenate([self.whist, np.zeros((m * self.n_walls * 2, 3))])
         self.x_ref = s.x.copy()
-        if self.sys[itg.RODS] or np.any(half > 0):
-            self.sys[itg.RODS] = 1.0
+        if self.params.rods or np.any(half > 0):
+            self.params.rods = True
             self.u_ref = s.u.copy()
         # the new particles have empty rows in the old list: the springs carry over
         self._istart = np.concatenate([self._istart, np.full(m, self._istart[-1])])
@@ -529,8 +540,8 @@ class Simulation:
         if gamma_bg < 0 or gamma_rot < 0:
             raise ValueError(f"drags must be >= 0, got gamma_bg = {gamma_bg}, "
                              f"gamma_rot = {gamma_rot}")
-        self.sys[itg.GAMMA_BG] = float(gamma_bg)
-        self.sys[itg.GAMMA_ROT] = float(gamma_rot)
+        self.params.gamma_bg = float(gamma_bg)
+        self.params.gamma_rot = float(gamma_rot)
 
     def stress(self) -> np.ndarray:
         """Contact stress ``sigma_ab = (1/V) sum_c l^c_a F^c_b`` (tension positive) of the

@@ -299,10 +299,11 @@ def test_kept_shared_flags_are_found_again_for_a_new_list_or_new_parts(alpha_max
 
     def forces(own_flags):
         f, tq = np.empty_like(sim.f), np.empty_like(sim.torque)
+        walls = (sim.planes, sim.cyls, sim._wp, sim.whist.copy(), sim.wall_force)
         itg.forces(s.x, s.v, s.omega, s.u, s.radius, sim.half, s.mass, s.box, s.periodic,
-                   *sim._pairs(), sim.model.law_id, sim._cp, sim.model.friction, sim.planes,
-                   sim.cyls, sim._wp, sim._wfriction, sim.whist.copy(), sim.wall_force,
-                   sim.sys, 0.0, sim.dt, f, tq, np.zeros((3, 3)), False, None, own_flags)
+                   sim._pairs(), sim.model.law_id, sim._cp, sim.model.friction, walls,
+                   sim._wfriction, sim.params, sim.cache, 0.0, sim.dt, f, tq, np.zeros((3, 3)),
+                   False, None, own_flags)
         return f, tq
 
     hist = sim.hist.copy()
@@ -317,11 +318,11 @@ def test_kept_shared_flags_are_found_again_for_a_new_list_or_new_parts(alpha_max
             sim._index_pairs()
             sim._rebuild()
             hist = sim.hist.copy()
-        sim.sys[itg.PARTS] = parts
+        sim.params.parts = parts
         for kept in (False, True, True):
             sim.hist[:] = hist
             got = forces(own)
-            assert sim.sys[itg.OWN_PARTS] == parts
+            assert sim.cache.own_parts == parts
             sim.hist[:] = hist
             want = forces(None)
             for a, b in zip(got, want):
