@@ -1,18 +1,23 @@
 """Checkpoints: a resumed run is bit-identical to an uninterrupted one."""
+import json
 import os
 import signal
 import subprocess
+from pathlib import Path
 
 import numpy as np
+import pytest
 import yaml
 
 from pysim import checkpoint
 from pysim.initial import write_initial
+from pysim.records import copy_record
 from pysim.simulation import ContactModel, Simulation
 from pysim.state import State
 from pysim.walls import cylinder, plane
 from rodcase.case import validate_case
 from tests.cases import PYSIM_COMPRESS
+from tests.pysim.data import make_format1_checkpoints as format1
 from tests.runs import pysim_run, start_mid_run
 
 
@@ -139,3 +144,91 @@ def test_ctrl_c_stops_with_a_message_and_the_run_resumes(tmp_path):
                            capture_output=True, text=True)
     assert again.returncode == 0, again.stderr
     assert (out / "run.json").exists() and (out / "thermo.dat").exists()
+
+
+# -- checkpoints of format 1 (the kernels' scalars in one float array of slots) ------------
+FORMAT1 = Path(__file__).resolve().parent / "data"
+
+
+def assert_continued(sim: Simulation, want) -> None:
+    """``sim`` holds the state that the format-1 code reached (``<scene>_continued.npz``)."""
+    for k in format1.CONTINUED:
+        np.testing.assert_array_equal(getattr(sim.state, k), want[k], err_msg=k)
+    for k in format1.SIM_CONTINUED:
+        np.testing.assert_array_equal(getattr(sim, k), want[k], err_msg=k)
+    assert (sim.state.step, sim.state.time) == tuple(want["clock"])
+
+
+@pytest.mark.parametrize("name", sorted(format1.SCENES))
+def test_a_format1_checkpoint_resumes_with_the_bits_of_the_code_that_wrote_it(name):
+    """A checkpoint written by the code of format 1 (tests/pysim/data, with what that code
+    reached from it) loads into the records and continues with the same bits, which are
+    also those of an uninterrupted run of this code."""
+    with np.load(FORMAT1 / f"{name}.npz") as data:
+        assert len(data["sim_sys"]) == len(checkpoint.FORMAT1_SLOTS)
+    sim, extra = checkpoint.load(FORMAT1 / f"{name}.npz")
+    assert extra == {"scene": name}
+    whole = format1.scene(name)
+    format1.first_steps(name, whole)
+    assert_same(sim, whole)
+    # every slot went to its field (the threads' own flags are not stored: found again)
+    assert sim.params.tobytes() == whole.params.tobytes()
+    assert sim.cache.own_parts == 0 and whole.cache.own_parts == 1
+    whole_cache = copy_record(whole.cache)
+    whole_cache.own_parts = 0
+    assert sim.cache.tobytes() == whole_cache.tobytes()
+    assert np.abs(sim.hist).max() > 0
+    format1.last_steps(name, sim)
+    format1.last_steps(name, whole)
+    with np.load(FORMAT1 / f"{name}_continued.npz") as want:
+        assert_continued(sim, want)
+        assert_continued(whole, want)
+    if name == "rods_tapped":
+        assert np.abs(sim.whist).max() > 0
+
+
+def test_an_earlier_format1_checkpoint_with_fewer_slots_resumes_with_a_new_list(tmp_path):
+    """Earlier checkpoints of format 1 hold the first slots only (the build state and the
+    threads' bookkeeping came later) and no ``u_ref``: the records are completed, a new
+    list is built, and the run goes on with the same bits."""
+    name = "rods_2d_growing"
+    with np.load(FORMAT1 / f"{name}.npz") as data:
+        arrays = {k: data[k] for k in data.files if k != "sim_u_ref"}
+    arrays["sim_sys"] = arrays["sim_sys"][:14]  # up to the build's largest half-length
+    arrays["sim_sys"][[10, 12, 13]] = 0.0  # not yet written by those versions
+    np.savez(tmp_path / "old.npz", **arrays)
+    sim, _ = checkpoint.load(tmp_path / "old.npz")
+    assert sim.params.rods and sim.params.dim2 and sim.cache.rc_build > 0
+    assert sim.rebuilds == int(json.loads(bytes(arrays["meta"]).decode())["sim"]["rebuilds"])
+    format1.last_steps(name, sim)
+    with np.load(FORMAT1 / f"{name}_continued.npz") as want:
+        assert_continued(sim, want)
+
+
+def test_a_checkpoint_of_another_format_is_a_clear_error(tmp_path):
+    with np.load(FORMAT1 / "rods_tapped.npz") as data:
+        arrays = {k: data[k] for k in data.files}
+    meta = json.loads(bytes(arrays["meta"]).decode())
+    meta["format"] = 7
+    arrays["meta"] = np.frombuffer(json.dumps(meta).encode(), dtype=np.uint8)
+    np.savez(tmp_path / "c.npz", **arrays)
+    with pytest.raises(ValueError, match=r"checkpoint format 7 is not one of \(1, 2\)"):
+        checkpoint.load(tmp_path / "c.npz")
+
+
+def test_a_checkpoint_stores_the_records_by_field_name(tmp_path):
+    """Format 2 stores both records as structured arrays whose fields are the records'
+    (read back by name, no pickle)."""
+    sim = format1.scene("spheres_compressed")
+    sim.run(50, strain_rate=-1.0)
+    checkpoint.save(sim, tmp_path / "c.npz")
+    with np.load(tmp_path / "c.npz") as data:
+        assert "sim_sys" not in data.files
+        assert data["sim_params"].dtype.names == sim.params.dtype.names
+        assert data["sim_cache"]["rc_build"] == sim.cache.rc_build
+        np.testing.assert_array_equal(data["sim_params"]["strain_rate"], [-1.0] * 3)
+    back, _ = checkpoint.load(tmp_path / "c.npz")
+    assert back.params.tobytes() == sim.params.tobytes()
+    for f in sim.cache.dtype.names:  # the threads' own flags are found again
+        np.testing.assert_array_equal(back.cache[f], 0 if f == "own_parts" else sim.cache[f])
+    assert isinstance(back.params, np.record) and isinstance(back.cache, np.record)

@@ -66,25 +66,37 @@ def scene(name: str) -> Simulation:
     raise ValueError(f"unknown scene {name!r}; valid: {sorted(SCENES)}")
 
 
+def first_steps(name: str, sim: Simulation) -> None:
+    """The steps before the checkpoint."""
+    before, _, kw = SCENES[name]
+    sim.run(before // 2, **kw)
+    if name == "spheres_compressed":
+        sim.set_drag(0.3, 0.1)  # a checkpoint keeps the drags of the moment
+    sim.run(before - before // 2, **kw)
+
+
+def last_steps(name: str, sim: Simulation) -> None:
+    """The steps after the checkpoint."""
+    _, after, kw = SCENES[name]
+    sim.run(after, **kw)
+
+
 def main(out: Path) -> None:
     set_threads(1)
-    for name, (before, after, kw) in SCENES.items():
+    for name in SCENES:
         sim = scene(name)
-        sim.run(before // 2, **kw)
-        if name == "spheres_compressed":
-            sim.set_drag(0.3, 0.1)  # a checkpoint keeps the drags of the moment
-        sim.run(before - before // 2, **kw)
+        first_steps(name, sim)
         checkpoint.save(sim, out / f"{name}.npz", extra={"scene": name})
         print(name, "at the checkpoint: pair contacts", sim.thermo().n_contacts,
               "wall contacts", sim._nw, "springs", int(np.count_nonzero(sim.hist.any(axis=1))),
               "wall springs", int(np.count_nonzero(sim.whist.any(axis=1))))
-        sim.run(after, **kw)
+        last_steps(name, sim)
         arrays = {k: getattr(sim.state, k) for k in CONTINUED}
         arrays.update({k: getattr(sim, k) for k in SIM_CONTINUED})
         arrays["clock"] = np.array([sim.state.step, sim.state.time])
         np.savez(out / f"{name}_continued.npz", **arrays)
-        print(name, "continued: pair contacts", sim.thermo().n_contacts, "wall contacts", sim._nw,
-              "springs", int(np.count_nonzero(sim.hist.any(axis=1))))
+        print(name, "continued: pair contacts", sim.thermo().n_contacts, "wall contacts",
+              sim._nw, "springs", int(np.count_nonzero(sim.hist.any(axis=1))))
 
 
 if __name__ == "__main__":
