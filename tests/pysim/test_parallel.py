@@ -282,6 +282,36 @@ def test_one_and_two_threads_give_identical_bits(alpha_max):
     assert a._pe == b._pe
 
 
+@pytest.mark.slow
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 Numba threads")
+@pytest.mark.parametrize("alpha_max", [3.0, 0.0])
+def test_a_run_after_fire_rebuilt_the_list_gives_the_bits_of_one_thread(alpha_max):
+    """FIRE runs on the run's cache: a list it builds is the run's list from then on, and
+    the threads' shared-particle flags kept for the old one are found again (with FIRE on
+    a copy of the cache, the next run kept the old list's flags: on two threads some
+    reactions were added twice or lost)."""
+    before = get_threads()
+    out = []
+    try:
+        for threads in (1, 2):
+            set_threads(threads)
+            sim = dense_rods_with_friction(alpha_max)
+            sim.run(1500, strain_rate=-3.0)
+            pj = sim.pj
+            sim.minimize(1e-9, max_iter=2000)
+            assert sim.pj is not pj  # FIRE rebuilt the list
+            sim.run(300, strain_rate=-3.0)
+            out.append(sim)
+    finally:
+        set_threads(before)
+    a, b = out
+    assert a.thermo().n_contacts > 50 and np.abs(a.hist).max() > 0
+    for k in ("x", "v", "q", "omega"):
+        np.testing.assert_array_equal(getattr(a.state, k), getattr(b.state, k), err_msg=k)
+    for k in ("f", "torque", "virial", "hist"):
+        np.testing.assert_array_equal(getattr(a, k), getattr(b, k), err_msg=k)
+
+
 @pytest.mark.parametrize("alpha_max", [3.0, 0.0])
 def test_kept_shared_flags_are_found_again_for_a_new_list_or_new_parts(alpha_max):
     """``forces`` keeps the flags of the threads' shared particles from call to call:
