@@ -121,16 +121,16 @@ def load(path) -> tuple[Simulation, dict]:
     if missing or not complete:
         # an earlier version's checkpoint: complete the records and start a fresh pair
         # list (the forces do not depend on the list, so the run continues unchanged)
-        sim.params.rods = bool(np.any(sim.half > 0))
-        sim.params.dim2 = state.dimension == 2
-        sim.u_ref = state.u.copy() if sim.params.rods else np.zeros((0, 3))
+        sim.params["rods"] = bool(np.any(sim.half > 0))
+        sim.params["dim2"] = state.dimension == 2
+        sim.u_ref = state.u.copy() if sim.params["rods"][0] else np.zeros((0, 3))
         sim._rebuild()
         sim.rebuilds -= 1
     sim._new_scratch()
     return sim, meta["extra"]
 
 
-def _record(path, saved: np.ndarray, name: str) -> np.record:
+def _record(path, saved: np.ndarray, name: str) -> np.ndarray:
     """The record ``name`` (``params`` or ``cache``) from its stored copy, field by field."""
     rec = _RECORDS[name]()
     lacks = [f for f in rec.dtype.names if f not in (saved.dtype.names or ())]
@@ -141,7 +141,7 @@ def _record(path, saved: np.ndarray, name: str) -> np.record:
     return rec
 
 
-def _from_slots(sys: np.ndarray) -> tuple[np.record, np.record, bool]:
+def _from_slots(sys: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
     """The records from format 1's slots (:data:`FORMAT1_SLOTS`; fields past the slots
     given stay zero), and whether every slot was there."""
     recs = {name: make() for name, make in _RECORDS.items()}
@@ -149,8 +149,5 @@ def _from_slots(sys: np.ndarray) -> tuple[np.record, np.record, bool]:
         rec = recs[name]
         kind = rec.dtype.fields[field][0].base.kind
         value = bool(value != 0.0) if kind == "b" else int(value) if kind == "i" else value
-        if comp is None:
-            rec[field] = value
-        else:
-            rec[field][comp] = value
+        rec[field][(0,) if comp is None else (0, comp)] = value
     return recs["params"], recs["cache"], len(sys) >= len(FORMAT1_SLOTS)

@@ -114,18 +114,19 @@ def rebuild(x, u, box, periodic, r_int, half, params, cache, pairs, ref):
     """A new pair list for the current state, carrying the tangential springs over from
     the old one (``pairs``); writes the build's state (``ref``, ``cache``). Returns the
     new pair arrays (:data:`PAIR_ARRAYS`)."""
+    prm, cch = params[0], cache[0]  # the records (pysim.records)
     old_pj, old_istart, old_hist, fj = pairs[1], pairs[2], pairs[5], pairs[6]
     x_ref, u_ref, box_ref = ref
     n = max(x.shape[0], 1)  # room per row in the build: 1.5 times the old mean row
     room = 3 * old_pj.shape[0] // (2 * n) + 2 if old_pj.shape[0] else ROW_ROOM
     # the spine-separation row of the pair scratch is rewritten below: the build's buffer
     scratch = fj[SEP].view(np.int32) if fj.shape[0] > SEP else np.empty(0, np.int32)
-    pi, pj, istart, jstart, jk = build_list(x, u, r_int, half, box, periodic, params.skin, room,
+    pi, pj, istart, jstart, jk = build_list(x, u, r_int, half, box, periodic, prm.skin, room,
                                             scratch)
     hist = transfer_rows(old_istart, old_pj, old_hist, istart, pj)
     if fj.shape[1] < pj.shape[0] or fj.shape[0] < PAIR_SCRATCH:  # scratch with 10 % to spare
         fj = np.empty((PAIR_SCRATCH, pj.shape[0] + pj.shape[0] // 10 + 16))
-    if params.rods:  # only the rod loop skips pairs by their separation
+    if prm.rods:  # only the rod loop skips pairs by their separation
         spine_separations(x, u, half, box, periodic, pi, pj, fj[SEP])
     x_ref[:, :] = x
     if u_ref.shape[0] == u.shape[0]:
@@ -136,13 +137,13 @@ def rebuild(x, u, box, periodic, r_int, half, params, cache, pairs, ref):
     for i in range(x.shape[0]):
         rc = max(rc, r_int[i] - half[i])
         hm = max(hm, half[i])
-    cache.rint_build = max_of(r_int)
-    cache.rc_build = 2.0 * rc
-    cache.half_build = hm
-    cache.sep_sigma = 1.0
-    cache.sep_shrink = 0.0
-    cache.slot_parts = 0
-    cache.own_parts = 0
+    cch.rint_build = max_of(r_int)
+    cch.rc_build = 2.0 * rc
+    cch.half_build = hm
+    cch.sep_sigma = 1.0
+    cch.sep_shrink = 0.0
+    cch.slot_parts = 0
+    cch.own_parts = 0
     return pi, pj, istart, jstart, jk, hist, fj
 
 
@@ -153,13 +154,14 @@ def maybe_rebuild(x, u, box, periodic, r_int, half, params, cache, pairs, ref, d
     arrays and whether it rebuilt. ``dl``: each particle's share of the motion bound,
     written here (:func:`pysim.neighbors.motion_bound`; zero after a build) for
     :func:`forces`."""
+    prm, cch = params[0], cache[0]  # the records (pysim.records)
     x_ref, u_ref, box_ref = ref
-    growth = max_of(r_int) / cache.rint_build if cache.rint_build > 0 else 1.0
+    growth = max_of(r_int) / cch.rint_build if cch.rint_build > 0 else 1.0
     sigma, shrink = motion_bound(x, x_ref, u, u_ref, half, box, box_ref, periodic,
-                                 cache.half_build, growth, dl)
-    if not stale_by_bound(sigma, shrink, cache.rc_build, params.skin, growth):
-        cache.sep_sigma = sigma
-        cache.sep_shrink = shrink
+                                 cch.half_build, growth, dl)
+    if not stale_by_bound(sigma, shrink, cch.rc_build, prm.skin, growth):
+        cch.sep_sigma = sigma
+        cch.sep_shrink = shrink
         return pairs, False
     pairs = rebuild(x, u, box, periodic, r_int, half, params, cache, pairs, ref)
     if dl is not None:
@@ -183,49 +185,50 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pairs, law, cp, fr
            wfriction, params, cache, t, dt, f, torque, virial, stats, dl=None, own=None):
     """Overwrite ``f``, ``torque`` with pair contacts, walls, gravity ``m g``, drag
     ``-gamma_bg v`` and ``-gamma_rot omega`` (added in that order). With ``stats`` also
-    the virial and the largest overlap (``cache.worst``), and returns ``(elastic energy,
+    the virial and the largest overlap (the cache's ``worst``), and returns ``(elastic energy,
     pair contacts, wall contacts)``; without, the virial and the overlap are left as they
     were and the first two are zero. ``wfriction``: the walls keep springs (``whist``).
     ``dl``: the particles' shares of the motion bound that :func:`maybe_rebuild` wrote
-    with ``cache.sep_sigma`` (rods skip the pairs it keeps out of reach; the same forces).
+    with ``sep_sigma`` (rods skip the pairs it keeps out of reach; the same forces).
     ``own``: n flags kept from call to call, the shared particles of the parts
-    (``cache.own_parts``), else they are found at every call."""
+    (the cache's ``own_parts``), else they are found at every call."""
+    prm, cch = params[0], cache[0]  # the records (pysim.records)
     pi, pj, istart, jstart, jk, hist, fj = pairs
     planes, cyls, wp, whist, wall_force = walls
     # the sphere and rod passes write complete pair forces on any number of threads (one
     # part of the rows per thread); the general pass does on one thread only (scatter),
     # else reduce_pass adds the stored reactions. The same bits either way.
-    parts = params.parts
+    parts = prm.parts
     scatter = True
-    ends = params.rods and cp[END_BONDS] != 0.0
-    if not ends and parts > 1 and cache.slot_parts != parts:
-        clear_slots(istart, jstart, jk, fj, parts, not params.rods)
-        cache.slot_parts = parts
+    ends = prm.rods and cp[END_BONDS] != 0.0
+    if not ends and parts > 1 and cch.slot_parts != parts:
+        clear_slots(istart, jstart, jk, fj, parts, not prm.rods)
+        cch.slot_parts = parts
     ownv = own if own is not None else np.empty(0, np.bool_)
-    own_ok = cache.own_parts == parts
+    own_ok = cch.own_parts == parts
     if ownv.shape[0] == x.shape[0] and not ends:
-        cache.own_parts = parts  # the pass writes them now if they were not
-    worst = cache.worst  # a view: the passes write the overlap there
+        cch.own_parts = parts  # the pass writes them now if they were not
+    worst = cch.worst  # a view: the passes write the overlap there
     if ends:
         scatter = parts == 1
         pe, nc = pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, jk,
                            hist, law, cp, friction, dt, True, f, torque, fj, stats, virial,
-                           cache.sep_sigma, cache.sep_shrink, scatter)
-        cache.slot_parts = 0  # it wrote every slot
+                           cch.sep_sigma, cch.sep_shrink, scatter)
+        cch.slot_parts = 0  # it wrote every slot
         if stats:
             worst[1] = WORST_UNKNOWN
-    elif params.rods:
+    elif prm.rods:
         pe, nc = rod_pass(x, v, omega, u, radius, half, box, periodic, pi, pj, istart, jstart,
                           jk, hist, law, cp, friction, dt, f, torque, fj, stats, virial,
-                          cache.sep_sigma, cache.sep_shrink, parts, worst, dl, ownv, own_ok)
+                          cch.sep_sigma, cch.sep_shrink, parts, worst, dl, ownv, own_ok)
     else:
         pe, nc = sphere_pass(x, v, omega, radius, box, periodic, pi, pj, istart, jstart, jk,
                              hist, law, cp, friction, dt, f, torque, fj, stats, virial, parts,
                              worst, ownv, own_ok)
-    g = params.gravity
+    g = prm.gravity
     gx, gy, gz = g[0], g[1], g[2]
-    gb = params.gamma_bg
-    gr = params.gamma_rot
+    gb = prm.gamma_bg
+    gr = prm.gamma_rot
     body = gx != 0.0 or gy != 0.0 or gz != 0.0 or gb != 0.0 or gr != 0.0
     any_walls = planes.shape[0] + cyls.shape[0] > 0
     if not scatter or (body and not any_walls):
@@ -239,7 +242,7 @@ def forces(x, v, omega, u, radius, half, mass, box, periodic, pairs, law, cp, fr
                          whist, dt, f, torque, wall_force, False, no_ij, no_rec)
         if body:
             _body(f, torque, v, omega, mass, gx, gy, gz, gb, gr)
-    if params.dim2:
+    if prm.dim2:
         _planar_forces(f, torque)
     return pe, nc, nw
 
@@ -635,26 +638,27 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
     none). Returns ``(pairs, elastic energy, pair contacts, wall contacts, rebuilds, steps
     done)``.
     """
+    prm = params[0]  # the record (pysim.records)
     h = 0.5 * dt
     inv = np.empty((x.shape[0], 3))  # from mass and inertia at every call: never stale
     inverses(mass, inertia, inv)
-    parts = params.parts
-    lanes = params.rods  # rods turn on SIMD lanes
+    parts = prm.parts
+    lanes = prm.rods  # rods turn on SIMD lanes
     pe = 0.0
     nc = 0
     nw = 0
     rebuilds = 0
     scale = np.ones(3)
     deform = False
-    rate = params.strain_rate
+    rate = prm.strain_rate
     for k in range(3):
         if rate[k] != 0.0:
             scale[k] = np.exp(rate[k] * dt)
             deform = True
-    dim2 = params.dim2
+    dim2 = prm.dim2
     sc = 1.0
-    if params.growth != 0.0:
-        sc = np.exp(params.growth * dt)
+    if prm.growth != 0.0:
+        sc = np.exp(prm.growth * dt)
     # mass grows with the volume (area in 2-D), inertia with mass times length squared
     sc3 = sc * sc if dim2 else sc * sc * sc
     sc5 = sc3 * sc * sc
@@ -750,20 +754,21 @@ def _heun_correct(x, x0, f0, f, t0, torque, v, omega, q, q0, u, mass, inertia, m
 def heun_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia, msize, box,
                periodic, pairs, ref, law, cp, walls, params, cache, clock, dt, nsteps, virial):
     """Advance ``nsteps`` overdamped Heun steps (see the module doc). ``msize`` is the
-    particle area (2-D) or volume (3-D); ``params.k_d`` the substrate drag ``k_d``; the box
-    contracts at ``params.strain_rate`` (``-kappa``). No tangential springs, of pairs or
+    particle area (2-D) or volume (3-D); the parameter ``k_d`` the substrate drag; the box
+    contracts at the parameter ``strain_rate`` (``-kappa``). No tangential springs, of pairs or
     walls. ``v``/``omega`` return the last mobility velocities (non-affine). Returns
     ``(pairs, elastic energy, contacts, rebuilds)``."""
+    prm = params[0]  # the record (pysim.records)
     n = x.shape[0]
     x0 = np.empty((n, 3))
     q0 = np.empty((n, 4))
     f0 = np.empty((n, 3))
     t0_ = np.empty((n, 3))
     scale = np.empty(3)
-    rate = params.strain_rate
+    rate = prm.strain_rate
     for k in range(3):
         scale[k] = np.exp(rate[k] * dt)
-    kd = params.k_d
+    kd = prm.k_d
     pe = 0.0
     nc = 0
     rebuilds = 0

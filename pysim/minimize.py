@@ -30,7 +30,6 @@ from scipy.optimize import minimize
 
 from pysim import integrators as itg
 from pysim.jit import njit
-from pysim.records import copy_record
 from pysim.rotation import quaternions_from_axes
 
 
@@ -47,7 +46,7 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
     if sim.model.friction or sim.model.f_coh > 0:
         raise ValueError(f"L-BFGS minimises the elastic energy: friction (mu = {sim.model.mu}) "
                          f"and cohesion (f_coh = {sim.model.f_coh}) must be 0; use FIRE")
-    if sim.n_walls or np.any(sim.params.gravity != 0.0):
+    if sim.n_walls or np.any(sim.params["gravity"] != 0.0):
         raise ValueError("L-BFGS minimises the pair-contact energy only: this simulation has "
                          "walls or gravity; use FIRE")
     if f_tol <= 0 or max_iter < 1:
@@ -58,7 +57,7 @@ def lbfgs(sim, f_tol: float, max_iter: int = 10_000, memory: int = 10):
     scale = sim.half[rods][:, None]
     scale_r = np.ascontiguousarray(scale[:, 0])
     nx = n * dim
-    saved = copy_record(sim.params)
+    saved = sim.params.copy()
     for name in FREE_PARAMS:
         sim.params[name] = 0.0
     s.v[:] = 0.0

@@ -6,12 +6,14 @@ that Python sets and the kernels only read, and ``cache`` (:data:`CACHE_DTYPE`, 
 :data:`CACHE_FIELDS`), what the kernels keep from call to call: the state of the last
 list build, the motion bound since, the threads' bookkeeping, the largest overlap.
 
-Each is one element of a NumPy structured array (:func:`new_params`, :func:`new_cache`):
-a ``numpy.record`` that Python reads and writes by field name (``sim.params.skin``) and
-that Numba passes to the kernels by reference, where a field read (``params.skin``) compiles
-to one load at a fixed offset and a write is seen in Python. Checkpoints store both
-records by field name (:mod:`pysim.checkpoint`). Lengths, times and masses are in the
-units of the case (pysim never converts units).
+Each is a NumPy structured array of one element (:func:`new_params`, :func:`new_cache`).
+Python sets and reads its fields by name (``sim.params["skin"] = 0.1``); a kernel takes
+the element (``prm = params[0]``), a record whose field reads (``prm.skin``) Numba
+compiles to one load at a fixed offset and whose writes land in the array. The array,
+not its element, crosses from Python into the kernels: Numba types an array argument
+from its dtype at once, a ``numpy.record`` through its fields at every call.
+Checkpoints store both records by field name (:mod:`pysim.checkpoint`). Lengths, times
+and masses are in the units of the case (pysim never converts units).
 """
 from __future__ import annotations
 
@@ -65,7 +67,7 @@ CACHE_FIELDS = (
 
 def _record_dtype(fields) -> np.dtype:
     """A record dtype of ``fields`` (C layout, fields aligned), whose elements read and
-    write their fields as attributes."""
+    write their fields as attributes (also in plain Python, ``NUMBA_DISABLE_JIT=1``)."""
     return np.dtype((np.record, np.dtype([(name, kind) for name, kind, _ in fields],
                                          align=True)))
 
@@ -73,23 +75,17 @@ def _record_dtype(fields) -> np.dtype:
 PARAMS_DTYPE = _record_dtype(PARAM_FIELDS)
 CACHE_DTYPE = _record_dtype(CACHE_FIELDS)
 
-#: ``cache.worst[1]`` when the last force evaluation with statistics could not tell the
-#: largest overlap (``end_bonds`` rods): :func:`pysim.contacts.worst_overlap` must
+#: The pair in the cache field ``worst`` when the last force evaluation with statistics
+#: could not tell the largest overlap (``end_bonds`` rods): :func:`pysim.contacts.
+#: worst_overlap` must
 WORST_UNKNOWN = -2.0
 
 
-def new_params() -> np.record:
+def new_params() -> np.ndarray:
     """A parameter record, every field zero (no drag, gravity, strain, growth)."""
-    return np.zeros(1, PARAMS_DTYPE)[0]
+    return np.zeros(1, PARAMS_DTYPE)
 
 
-def new_cache() -> np.record:
+def new_cache() -> np.ndarray:
     """A cache record, every field zero (as before any list build)."""
-    return np.zeros(1, CACHE_DTYPE)[0]
-
-
-def copy_record(rec: np.record) -> np.record:
-    """A copy of a record, independent of the original."""
-    out = np.empty(1, rec.dtype)
-    out[0] = rec
-    return out[0]
+    return np.zeros(1, CACHE_DTYPE)

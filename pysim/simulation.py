@@ -26,7 +26,7 @@ from pysim.contacts import PAIR_SCRATCH, REC_COLUMNS, pair_forces, worst_overlap
 from pysim.forces import END_BONDS, KEEP_SPRING, LAW_IDS, NO_TENSION, contact_params
 from pysim.jit import get_threads
 from pysim.neighbors import row_starts, transpose
-from pysim.records import WORST_UNKNOWN, copy_record, new_cache, new_params
+from pysim.records import WORST_UNKNOWN, new_cache, new_params
 from pysim.state import State
 from pysim.walls import CYL_COLUMNS, PLANE_COLUMNS, wall_forces
 
@@ -195,12 +195,12 @@ class Simulation:
         if s.dimension == 2 and g[2] != 0:
             raise ValueError(f"gravity {tuple(g)} has a z component in a 2-D run; use (0, -g, 0)")
         self.params = new_params()
-        self.params.gamma_bg = model.gamma_bg
-        self.params.gamma_rot = model.gamma_rot
-        self.params.gravity = g
-        self.params.skin = self.skin
-        self.params.rods = bool(np.any(self.half > 0))
-        self.params.dim2 = s.dimension == 2
+        self.params["gamma_bg"] = model.gamma_bg
+        self.params["gamma_rot"] = model.gamma_rot
+        self.params["gravity"] = g
+        self.params["skin"] = self.skin
+        self.params["rods"] = bool(np.any(self.half > 0))
+        self.params["dim2"] = s.dimension == 2
         self.cache = new_cache()
         for k in range(3):
             if s.periodic[k] and s.box[k] < 2.0 * (dmax + model.d_coh + self.skin):
@@ -222,7 +222,7 @@ class Simulation:
         self.pj = np.zeros(0, np.int32)
         self.hist = np.zeros((0, 3 if model.friction else 0))
         self.x_ref = s.x.copy()
-        self.u_ref = s.u.copy() if self.params.rods else np.zeros((0, 3))
+        self.u_ref = s.u.copy() if self.params["rods"][0] else np.zeros((0, 3))
         self.box_ref = s.box.copy()
         self._new_scratch()
         self._index_pairs()
@@ -287,11 +287,11 @@ class Simulation:
         rods' contact pass alone (empty otherwise; infinite, no pair skipped by it, until
         then); ``_own``, the threads' shared-particle flags that
         :func:`pysim.integrators.forces` keeps, found again at the first step
-        (``cache.own_parts = 0``)."""
-        one_bond = self.params.rods and not self._cp[END_BONDS]
+        (the cache field ``own_parts`` 0)."""
+        one_bond = self.params["rods"][0] and not self._cp[END_BONDS]
         self._dl = np.full(self.state.n if one_bond else 0, np.inf)
         self._own = np.zeros(self.state.n, np.bool_)
-        self.cache.own_parts = 0
+        self.cache["own_parts"] = 0
 
     def _index_pairs(self):
         """Derive the row starts, the transposed index and the reaction scratch from
@@ -313,7 +313,7 @@ class Simulation:
         """Forces, torques and virial of the current state (half-step velocities are
         whatever ``state.v`` holds)."""
         s = self.state
-        self.cache.sep_sigma = 0.0  # the state may have changed since the motion bound
+        self.cache["sep_sigma"] = 0.0  # the state may have changed since the motion bound
         self._sync_threads()
         self._pe, self._nc, self._nw = itg.forces(
             s.x, s.v, s.omega, s.u, s.radius, self.half, s.mass, s.box, s.periodic,
@@ -324,12 +324,12 @@ class Simulation:
     def _sync_threads(self):
         """Tell the kernels how many threads they run on (the contact pass cuts its rows
         into as many parts; the same bits for any number)."""
-        self.params.parts = get_threads()
+        self.params["parts"] = get_threads()
 
     def _check(self, what: str):
         """Raise :class:`BlowUpError` on non-finite positions or velocities, or on an
         overlap above ``max_overlap`` at the last force evaluation (the largest overlap
-        comes with the forces, ``cache.worst``: a pass over the pairs of its own
+        comes with the forces, the cache field ``worst``: a pass over the pairs of its own
         took as long as most of a step of 10^6 rods)."""
         s = self.state
         if not itg.all_finite(s.x, s.v):
@@ -339,10 +339,11 @@ class Simulation:
                 f"{what}: non-finite positions or velocities at step {s.step} for particles "
                 f"(0-based) {ids[:10].tolist()}; reduce dt (now {self.dt:g}) or the driving rate")
         if self._nc:
-            frac, k = self.cache.worst[0], int(self.cache.worst[1])
+            frac, k = self.cache["worst"][0]
+            k = int(k)
             if k == WORST_UNKNOWN:
                 frac, k = worst_overlap(s.x, s.u, s.radius, self.half, s.box, s.periodic,
-                                        self.pi, self.pj, bool(self.params.rods))
+                                        self.pi, self.pj, bool(self.params["rods"][0]))
             if k >= 0:
                 if frac > self.max_overlap:
                     a, b = int(self.pi[k]), int(self.pj[k])
@@ -361,8 +362,8 @@ class Simulation:
         s = self.state
         rate = np.broadcast_to(np.asarray(strain_rate, dtype=np.float64), (3,)).copy()
         rate[~s.periodic] = 0.0
-        self.params.strain_rate = rate
-        self.params.growth = growth_rate
+        self.params["strain_rate"] = rate
+        self.params["growth"] = growth_rate
         self._sync_threads()
         left = int(nsteps)
         while left > 0:  # a call returns after a list rebuild: the old list is freed here
@@ -391,8 +392,8 @@ class Simulation:
         rate = np.where(s.periodic, -float(kappa), 0.0)
         if s.dimension == 2:
             rate[2] = 0.0
-        self.params.strain_rate = rate
-        self.params.k_d = k_d
+        self.params["strain_rate"] = rate
+        self.params["k_d"] = k_d
         self._sync_threads()
         msize = s.mass / s.density
         (pairs, self._pe, self._nc, nreb) = itg.heun_chunk(
@@ -401,7 +402,7 @@ class Simulation:
             self.model.law_id, self._cp, self._walls(), self.params, self.cache, self._clock(),
             self.dt, int(nsteps), self.virial)
         self._set_pairs(pairs)
-        self.params.strain_rate = 0.0
+        self.params["strain_rate"] = 0.0
         self.rebuilds += nreb
         self._advance_clock(nsteps)
         self._check("overdamped Heun")
@@ -421,18 +422,18 @@ class Simulation:
         fire = np.array([self.dt, 0.1, 0.0, dt_max, 0.02 * self.dt])
         # FIRE's parameters: no drag, strain or growth; the cache is the run's (a list
         # that FIRE builds is the run's list from then on)
-        fire_params = copy_record(self.params)
-        fire_params.gamma_bg = 0.0
-        fire_params.gamma_rot = 0.0
-        fire_params.strain_rate = 0.0
-        fire_params.growth = 0.0
+        fire_params = self.params.copy()
+        fire_params["gamma_bg"] = 0.0
+        fire_params["gamma_rot"] = 0.0
+        fire_params["strain_rate"] = 0.0
+        fire_params["growth"] = 0.0
         s.v[:] = 0.0
         s.omega[:] = 0.0
         saved = self.params
         self.params = fire_params
         done = 0
         try:
-            self.compute_forces()  # also sets fire_params.parts
+            self.compute_forces()  # also sets the threads in fire_params
             while True:
                 chunk = int(max_iter) - done if until is None else min(check_every,
                                                                        int(max_iter) - done)
@@ -505,8 +506,9 @@ class Simulation:
         half = 0.5 * new.length
         self.half = np.concatenate([self.half, half])
         self.r_int = np.concatenate([self.r_int, new.radius + half + 0.5 * self.model.d_coh])
-        g = self.params.gravity
-        f = new.mass[:, None] * g[None, :] - self.params.gamma_bg * new.v  # what forces() adds
+        g = self.params["gravity"][0]
+        # what forces() adds
+        f = new.mass[:, None] * g[None, :] - self.params["gamma_bg"][0] * new.v
         if s.dimension == 2:
             f[:, 2] = 0.0
         self.f = np.ascontiguousarray(np.concatenate([self.f, f]))
@@ -514,8 +516,8 @@ class Simulation:
         if self._wfriction:
             self.whist = np.concatenate([self.whist, np.zeros((m * self.n_walls * 2, 3))])
         self.x_ref = s.x.copy()
-        if self.params.rods or np.any(half > 0):
-            self.params.rods = True
+        if self.params["rods"][0] or np.any(half > 0):
+            self.params["rods"] = True
             self.u_ref = s.u.copy()
         # the new particles have empty rows in the old list: the springs carry over
         self._istart = np.concatenate([self._istart, np.full(m, self._istart[-1])])
@@ -540,8 +542,8 @@ class Simulation:
         if gamma_bg < 0 or gamma_rot < 0:
             raise ValueError(f"drags must be >= 0, got gamma_bg = {gamma_bg}, "
                              f"gamma_rot = {gamma_rot}")
-        self.params.gamma_bg = float(gamma_bg)
-        self.params.gamma_rot = float(gamma_rot)
+        self.params["gamma_bg"] = float(gamma_bg)
+        self.params["gamma_rot"] = float(gamma_rot)
 
     def stress(self) -> np.ndarray:
         """Contact stress ``sigma_ab = (1/V) sum_c l^c_a F^c_b`` (tension positive) of the

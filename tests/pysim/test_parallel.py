@@ -348,11 +348,11 @@ def test_kept_shared_flags_are_found_again_for_a_new_list_or_new_parts(alpha_max
             sim._index_pairs()
             sim._rebuild()
             hist = sim.hist.copy()
-        sim.params.parts = parts
+        sim.params["parts"] = parts
         for kept in (False, True, True):
             sim.hist[:] = hist
             got = forces(own)
-            assert sim.cache.own_parts == parts
+            assert sim.cache["own_parts"][0] == parts
             sim.hist[:] = hist
             want = forces(None)
             for a, b in zip(got, want):
