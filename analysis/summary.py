@@ -528,9 +528,9 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
       :data:`STRESS_COLUMNS` columns of the container,
       :func:`analysis.stress.slab_stress_errors`), and ``sigma_m_p``, ``h_s_p``
       (unweighted), and ``sigma_m_trace = d sigma_m_p``, the saturation value of the
-      trace of the mean stress (the quantity a 2-D paper may fit); ``janssen_saturated`` 1 when the fitted ``h_s`` lies within the depth
-      of the data, else 0 and the fit values NaN (a straight profile fixes only the slope
-      ``sigma_m / h_s``);
+      trace of the mean stress (the quantity a 2-D paper may fit); ``janssen_saturated``
+      1 when the fitted ``h_s`` lies within the depth of the data, else 0 and the fit
+      values NaN (a straight profile fixes only the slope ``sigma_m / h_s``);
     * ``k_ratio``: ``sigma_hh / sigma_vv`` averaged over the lower half of the deposit;
     * ``major_order``: how vertical the major principal stress axes are in square (cubic)
       elements of :data:`STRESS_ELEMENT` particle lengths holding 3 grains or more

@@ -104,6 +104,12 @@ def test_the_script_follows_the_bands_up_an_energy_ladder(tmp_path):
         assert np.isfinite(row[f"{name}_exponent"])
     ladder = pd.read_csv(tmp_path / "modes.energies.csv")
     assert len(ladder) == 3 and ladder.energy_density.is_monotonic_increasing
+    # the rungs' band frequencies are the ones the exponents are fitted to
+    x = modes.frequency_exponents(ladder.energy_density,
+                                  ladder[list(modes.BAND_FREQUENCIES)].to_numpy())
+    for name in modes.BAND_FREQUENCIES:
+        assert row[f"{name}_exponent"] == pytest.approx(x[f"{name}_exponent"], rel=1e-12)
+        assert row[name] == pytest.approx(ladder[name].iloc[0], rel=1e-12)  # rung 0
     per_mode = pd.read_csv(tmp_path / "modes.modes.csv.gz")
     assert per_mode.energy_density.nunique() == 3 and len(per_mode) == 3 * row.n_dof
 

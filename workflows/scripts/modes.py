@@ -2,7 +2,12 @@
 ``jammed``, pysim runs): the Hessian of each final packing with its stiffness and stress
 parts (:mod:`analysis.modes`), written as a per-state summary and a per-mode table, and
 drawn as the density of states, the participation ratio and the rotational fraction
-against frequency.
+against frequency. Each stable state is also compressed up an energy ladder
+(``--energies``; ``<table>.energies.csv``, one row per rung): there the band frequencies
+(``omega_below_gap``, ``omega_low``, ``omega_middle``) are those of the stable state's
+bands followed by rank (:func:`analysis.modes.band_means`), since the gaps narrow and
+move, while the counts (``modes_above_gap``, ``mode_fraction_*``) are each rung's own
+gaps'.
 
 Each final state is read at full precision (``stable_state.npz``; older runs only have
 the 10-digit final frame, which unbalances forces of 1e-8 by some 1 % and can open the
@@ -195,6 +200,10 @@ def modes_of(sim, case: dict, step: int, metric: str = "paper") -> tuple[pd.Data
 ENERGIES = (1e-14, 1e-12)
 
 
+#: the band frequencies of a state's row, in the order of :func:`band_sizes`
+BAND_FREQUENCIES = ("omega_below_gap", "omega_low", "omega_middle")
+
+
 def band_sizes(omega2: np.ndarray) -> list[int]:
     """Sizes of a stable state's bands, to follow up its energy ladder: the modes below
     the widest gap, then the low and middle bands of the three-band split."""
@@ -225,9 +234,8 @@ def frequency_exponents(energies, means: np.ndarray) -> dict:
     each followed by its size in the stable state, :func:`analysis.modes.band_means`):
     ``omega_below_gap_exponent``, ``omega_low_exponent``, ``omega_middle_exponent``."""
     log_u = np.log(np.asarray(energies, float))
-    names = ("omega_below_gap", "omega_low", "omega_middle")
     return {f"{name}_exponent": float(np.polyfit(log_u, np.log(means[:, k]), 1)[0])
-            for k, name in enumerate(names)}
+            for k, name in enumerate(BAND_FREQUENCIES)}
 
 
 def plot_modes(tables: dict, out: Path, ladder: dict | None = None) -> None:
@@ -329,11 +337,15 @@ def main(argv=None) -> int:
             above, row = modes_of(sim, case, step, a.metric)
             steps.append(row)
             states.append(above)
+        # up the ladder the gaps narrow and move: every rung's band frequencies follow
+        # the stable state's bands by rank, one definition for the table and the fit
         sizes = band_sizes(table.omega2.to_numpy())
+        for t, r in zip(states, steps):
+            r.update(zip(BAND_FREQUENCIES, band_frequencies(t.omega2.to_numpy(), sizes)))
         if len(steps) > 2:
             summary.update(frequency_exponents(
                 [r["energy_density"] for r in steps],
-                np.array([band_frequencies(t.omega2.to_numpy(), sizes) for t in states])))
+                np.array([[r[name] for name in BAND_FREQUENCIES] for r in steps])))
         ladder += [{"variant": variant, "seed": seed, **r} for r in steps]
         for k, (t, r) in enumerate(zip(states, steps)):
             t = t.assign(variant=variant, seed=seed, energy_density=r["energy_density"])
