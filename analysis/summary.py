@@ -427,7 +427,8 @@ TAP_MARKS = (10, 100, 300, 900, 1000, 2000, 4134)
 
 def tap_mark_rows(curves: pd.DataFrame, fraction: float = LATE_FRACTION) -> list[tuple]:
     """The state at each tap count of :data:`TAP_MARKS` a run reaches: ``phi_tap<k>``,
-    ``angle_tap<k>`` and ``angle_tap<k>_layer<j>``, means over the frames of the taps in
+    ``phi_tap<k>_enclosing`` (the density of the enclosing cylinder, where the curves have
+    it), ``angle_tap<k>`` and ``angle_tap<k>_layer<j>``, means over the frames of the taps in
     ``(k (1 - fraction), k]`` (at least tap ``k``'s own frames), as :func:`late_window`
     averages the end of a run."""
     rows = []
@@ -437,6 +438,8 @@ def tap_mark_rows(curves: pd.DataFrame, fraction: float = LATE_FRACTION) -> list
         w = curves[(curves.tap > k - max(1.0, fraction * k) + 1e-9) & (curves.tap <= k + 1e-9)]
         rows += [(f"phi_tap{k}", float(w.phi.mean()), np.nan),
                  (f"angle_tap{k}", float(w.angle.mean()), np.nan)]
+        if "phi_enclosing" in w:
+            rows.append((f"phi_tap{k}_enclosing", float(w.phi_enclosing.mean()), np.nan))
         j = 1
         while f"angle_layer{j}" in w:
             rows.append((f"angle_tap{k}_layer{j}", float(w[f"angle_layer{j}"].mean()), np.nan))

@@ -178,17 +178,24 @@ def _holds(ours, op: str, paper) -> bool:
 
 def observable_name(ref, layer=None, tap=None) -> str:
     """The ``summary.csv`` observable of a row: ``<observable>_layer<k>`` for a layer; at a
-    tap ``k`` (trends along the taps) ``angle_late`` becomes ``angle_tap<k>``."""
+    tap ``k`` (the row's ``tap``, or a point of a trend along the taps) ``_late`` becomes
+    ``_tap<k>``: ``angle_late`` -> ``angle_tap<k>``, ``phi_late_enclosing`` ->
+    ``phi_tap<k>_enclosing``."""
     name = str(ref.observable)
+    if tap is None and np.isfinite(_float(ref.tap)):
+        tap = _float(ref.tap)
     if tap is not None:
-        name = (name[:-len("_late")] if name.endswith("_late") else name) + f"_tap{int(tap)}"
+        name = (name.replace("_late", f"_tap{int(tap)}", 1) if "_late" in name
+                else f"{name}_tap{int(tap)}")
     layer = _float(ref.layer) if layer is None else float(layer)
     return f"{name}_layer{int(layer)}" if np.isfinite(layer) else name
 
 
 def _conditions(ref) -> list[tuple[str, str, object]]:
-    conds = [(c, "=", _float(getattr(ref, c))) for c in CONDITION_COLUMNS
-             if np.isfinite(_float(getattr(ref, c)))]
+    # a row's tap is where the value holds (observable_name takes it there): a run must
+    # reach it, and may go on
+    conds = [(c, ">=" if c == "tap" else "=", _float(getattr(ref, c)))
+             for c in CONDITION_COLUMNS if np.isfinite(_float(getattr(ref, c)))]
     return conds + parse_conditions(ref.conditions)
 
 

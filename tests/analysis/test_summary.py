@@ -3,7 +3,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from analysis.summary import cycle_rows, late_window, tap_cycle
+from analysis.summary import cycle_rows, late_window, tap_cycle, tap_mark_rows
 
 
 def curves(taps: int, frames_per_tap: int) -> pd.DataFrame:
@@ -29,6 +29,25 @@ def test_late_window_holds_the_last_eighth_of_the_taps(taps, per_tap, first, n):
 def test_late_window_of_a_run_without_taps_is_its_last_frame():
     settled = pd.DataFrame({"tap": [0.0], "angle": [20.0]})
     assert late_window(settled).angle.tolist() == [20.0]
+
+
+def test_tap_marks_average_the_last_eighth_before_each_mark():
+    c = curves(300, 1)
+    c["phi"] = c.angle / 1000
+    c["phi_enclosing"] = c.angle / 2000
+    c["angle_layer1"] = c.angle + 1
+    rows = {name: v for name, v, _ in tap_mark_rows(c)}
+    # tap 100: the frames of taps 88-100 (12.5 taps: after 87.5); tap 900 is not reached
+    assert rows["angle_tap100"] == pytest.approx(94.0)
+    assert rows["phi_tap100"] == pytest.approx(0.094)
+    assert rows["phi_tap100_enclosing"] == pytest.approx(0.047)
+    assert rows["angle_tap100_layer1"] == pytest.approx(95.0)
+    # tap 10: 1.25 taps, after tap 8.75: the frames of taps 9 and 10
+    assert rows["angle_tap10"] == 9.5
+    assert "angle_tap300" in rows and not any("tap900" in k for k in rows)
+    # curves without the enclosing density give no enclosing rows
+    assert not any(k.endswith("_enclosing")
+                   for k, _, _ in tap_mark_rows(c.drop(columns="phi_enclosing")))
 
 
 def thermo(every: int, steps: int, start: int, dt: float, period: float) -> pd.DataFrame:

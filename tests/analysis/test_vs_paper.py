@@ -180,6 +180,21 @@ def test_trends_along_the_layers_and_the_taps_of_one_run():
     assert r.verdict == "not run" and "tap 1000" in r.note
 
 
+def test_a_value_at_a_tap_takes_the_observable_there_from_runs_that_reach_it():
+    row = ref(study="tapping", observable="phi_late_enclosing", tap=2000.0, value=0.75,
+              uncertainty=0.005, uncertainty_kind="digits", conditions="")
+    runs, res = runs_and_results([0.62, 0.63], observable="phi_tap2000_enclosing",
+                                 tap=4134.0)
+    runs["family"] = "tapping"
+    r = match(refs(row), runs, res).iloc[0]
+    assert r.observable == "phi_tap2000_enclosing" and r.verdict == "differs"
+    assert math.isclose(r.ours, 0.625)
+    # a run that stops before tap 2000 is not at the paper's condition
+    runs["tap"] = 1000.0
+    r = match(refs(row), runs, res).iloc[0]
+    assert r.verdict.startswith("conditions differ: ") and "tap (ours 1000" in r.verdict
+
+
 def test_one_seed_has_no_uncertainty_of_ours():
     runs, res = runs_and_results([0.8801])
     res["uncertainty"] = 0.01  # a spread over frames, not an error of the mean
