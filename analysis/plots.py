@@ -13,6 +13,8 @@ import numpy as np  # noqa: E402
 ENGINE_COLORS = {"pysim": "tab:blue", "lammps": "tab:orange", "liggghts": "tab:green",
                  "lammps-body": "tab:red"}
 SEED_STYLES = ["-", "--", ":", "-."]
+#: line style per engine where colour tells the runs apart (any other engine: dotted)
+ENGINE_LINES = {"pysim": "-", "lammps": "--"}
 
 
 def _save(fig, path):
@@ -286,7 +288,7 @@ def tapping_curves(runs, out, phi_max=None, n_layers: int = 4, layer_label: str 
     for r, cv, seeds in _seed_groups(runs):
         x = 1.0 + cv.tap.clip(lower=0.0)
         color = cmap(r["index"] % 10)
-        ls = "-" if r["engine"] == "pysim" else ("--" if r["engine"] == "lammps" else ":")
+        ls = ENGINE_LINES.get(r["engine"], ":")
         label = (r["label"] if seeds == 1
                  else f"{r.get('group_label', r['label'])}, mean of {seeds} seeds")
         for k in range(n_layers + 1):
@@ -564,7 +566,7 @@ def deposit_profiles(runs, out):
     for r in runs:
         pr = r["profile"]
         color = cmap(r["index"] % 10)
-        ls = "-" if r["engine"] == "pysim" else ("--" if r["engine"] == "lammps" else ":")
+        ls = ENGINE_LINES.get(r["engine"], ":")
         axes[0].plot(pr.phi, pr.x, color=color, ls=ls, marker=".", label=r["label"])
         if "sigma_vv_err" in pr:  # standard errors from the spread over columns
             axes[1].errorbar(pr.sigma_vv, pr.x, xerr=pr.sigma_vv_err, color=color, ls=ls,
@@ -643,7 +645,7 @@ def janssen_against_paper(panels, out):
         x_max = 0.0
         for i, r in enumerate(panel["runs"]):
             color = cmap(i % 10)
-            ls = "-" if r["engine"] == "pysim" else ("--" if r["engine"] == "lammps" else ":")
+            ls = ENGINE_LINES.get(r["engine"], ":")
             x = np.asarray(r["x"], float)
             x_max = max(x_max, float(np.nanmax(x, initial=0.0)))
             top.plot(r["trace"], x, color=color, ls=ls, marker=".", label=r["label"])
