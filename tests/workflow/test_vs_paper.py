@@ -49,7 +49,7 @@ def _results(tmp_path, n=1000, taps=2000, values=(0.75, 0.76)):
         d.mkdir(parents=True)
         (d / "case.yaml").write_text(yaml.safe_dump(case))
         rows.append({"study": "tapping_x", "case": "an6", "engine": "pysim", "seed": seed,
-                     "observable": "phi_late", "value": v, "uncertainty": float("nan")})
+                     "observable": "phi_tap2000", "value": v, "uncertainty": float("nan")})
     pd.DataFrame(rows).to_csv(root / "summary.csv", index=False)
     return root
 
@@ -93,11 +93,23 @@ def test_script_writes_the_table_and_the_notebook_block(tmp_path):
 
 def test_a_run_at_other_conditions(tmp_path):
     refs = _refs(tmp_path)
-    results = _results(tmp_path, taps=400)
+    results = _results(tmp_path, n=500, taps=4134)
     out = tmp_path / "vs_paper.csv"
     assert main(["--references", str(refs), "--results", str(results), "--out", str(out)]) == 0
     v = pd.read_csv(out).verdict.iloc[0]
-    assert v == "conditions differ: tap (ours 400, paper 2000)"
+    assert v == "conditions differ: n (ours 500, paper 1000)"
+
+
+def test_a_run_that_stops_before_the_rows_tap(tmp_path):
+    # the value holds at tap 2000: a run of 400 taps has no phi_tap2000
+    refs = _refs(tmp_path)
+    results = _results(tmp_path, taps=400)
+    summary = pd.read_csv(results / "summary.csv").assign(observable="phi_tap300")
+    summary.to_csv(results / "summary.csv", index=False)
+    out = tmp_path / "vs_paper.csv"
+    assert main(["--references", str(refs), "--results", str(results), "--out", str(out)]) == 0
+    r = pd.read_csv(out).iloc[0]
+    assert r.verdict == "not run" and r.note == "no run reports phi_tap2000"
 
 
 def test_band_fractions_of_modes_csv_join_the_runs(tmp_path):
@@ -167,4 +179,4 @@ def test_reference_rows_at_a_runs_point():
     assert (pd.to_numeric(rows["Gamma"]).fillna(2.0) == 2.0).all()
     bands = rows[(rows["observable"] == "angle_late") & (rows["uncertainty_kind"] == "band")]
     assert sorted(bands["layer"].dropna().astype(int)) == [2, 3]
-    assert ((rows["observable"] == "phi_late") & (rows["tap"] == 2000)).any()
+    assert ((rows["observable"] == "phi_late_enclosing") & (rows["tap"] == 2000)).any()
