@@ -96,6 +96,7 @@ def test_surface_sampling_is_uniform_by_area(rng):
     assert flat.mean() == pytest.approx(2 * ln / (2 * ln + 2 * np.pi * r), abs=0.01)
 
 
+@pytest.mark.slow
 def test_disk_and_sphere_caging_numbers_fast():
     """Default run (about 8 s): 800 disk and 600 sphere trials, a 6 % bound (about 4
     standard errors; measured 5.018 +- 0.072 and 7.257 +- 0.110),

@@ -92,6 +92,7 @@ def test_a_run_returning_at_its_list_rebuilds_is_bit_identical():
     assert_same(a, b)
 
 
+@pytest.mark.slow
 def test_kill_9_and_resume_gives_identical_files(tmp_path):
     case = validate_case(PYSIM_COMPRESS)
     cp = tmp_path / "case.yaml"
@@ -125,6 +126,7 @@ def test_resume_without_checkpoint_is_a_clear_error(tmp_path):
     assert "no checkpoint to resume from" in r.stderr and "Traceback" not in r.stderr
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_with_a_message_and_the_run_resumes(tmp_path):
     """SIGINT (Ctrl-C) mid-run: one line on stderr, no traceback, exit status 130, the
     checkpoint kept; the same command with --resume finishes the run."""

@@ -60,6 +60,7 @@ def deposits(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_deposit_settles_inside_the_box(deposits):
     case, run_dir = deposits["frictional"]
     meta = json.loads((run_dir / "run.json").read_text())
@@ -83,6 +84,7 @@ def test_deposit_settles_inside_the_box(deposits):
     assert contacts.force[walls, 2].sum() == pytest.approx(weight, rel=0.01)
 
 
+@pytest.mark.slow
 def test_smooth_walls_put_the_whole_weight_on_the_base(deposits):
     """Without wall friction the side walls can hold no weight: the apparent mass at the
     base is the filled mass (it grows linearly with filling)."""
@@ -112,6 +114,7 @@ def test_smooth_walls_put_the_whole_weight_on_the_base(deposits):
     np.testing.assert_allclose(v["sigma_m_trace"], 3.0 * v["sigma_m_p"], equal_nan=True)
 
 
+@pytest.mark.slow
 def test_cohesion_makes_the_deposit_looser(deposits):
     phi = {}
     for name in ("frictional", "cohesive"):
@@ -121,6 +124,7 @@ def test_cohesion_makes_the_deposit_looser(deposits):
     assert phi["cohesive"] < phi["frictional"] - 0.03
 
 
+@pytest.mark.slow
 def test_rain_drag_caps_the_fall_speed(tmp_path):
     """protocol.rain_speed: while it rains no grain falls faster than rain_speed, so the
     kinetic energy stays below that of every grain at that speed (a free-falling column
@@ -253,6 +257,7 @@ def test_a_full_entry_line_is_a_clear_error():
         entry(case, 3, 0.5, 1.0, lo, others)
 
 
+@pytest.mark.slow
 def test_fed_run_resumes_bit_identically(fed_run, tmp_path):
     """A fed run stopped by its max_time in mid-feed is an error naming what to do, and
     keeps its checkpoint; the same run with the full max_time and --resume writes the
@@ -312,6 +317,7 @@ def test_add_particles_keeps_the_springs_and_refuses_overlaps():
         c.add_particles([[0.3, 8.0, 0.0]], 0.5, 1.0, [[1.0, 0.0, 0.0]])
 
 
+@pytest.mark.slow
 def test_fed_run_killed_and_resumed_writes_the_same_bytes(fed_run, tmp_path):
     """kill -9 in mid-feed (a checkpoint after every chunk), then --resume: the files of
     the uninterrupted run."""

@@ -115,6 +115,7 @@ def test_end_bonds_are_frictionless_and_named():
         ContactModel("hooke", 1.0, spine_contact="sides")
 
 
+@pytest.mark.slow
 def test_jammed_rods_with_end_bonds_are_force_and_torque_balanced(tmp_path):
     """2-D rods (alpha 1): with end bonds FIRE reaches U/L^2 = 1e-15 with every force and
     torque small against the mean contact force; the packing is hypostatic (z < 6). The

@@ -5,9 +5,12 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 HERE = Path(__file__).resolve().parent
 
 
+@pytest.mark.slow
 def test_kernels_without_jit():
     env = dict(os.environ, NUMBA_DISABLE_JIT="1")
     names = ("test_geometry.py", "test_contacts.py", "test_neighbors.py", "test_jit.py")

@@ -62,6 +62,7 @@ def test_threaded_pass_equals_serial_loop_and_reference(rng, friction):
         np.testing.assert_allclose(tq, tq_ref, rtol=1e-10, atol=1e-8)
 
 
+@pytest.mark.slow
 def test_rod_list_holds_every_pair_within_reach(rng):
     """build_list against brute-force spine distances, with and without a skin."""
     box = np.full(3, 8.0)
@@ -209,6 +210,7 @@ def test_each_rods_share_of_the_motion_bound_holds_for_every_pair(rng, growth):
     assert tighter / 30 > 0.5
 
 
+@pytest.mark.slow
 def test_a_rod_brought_into_contact_by_its_own_motion_is_not_skipped():
     """Two parallel rods 0.1 D apart at the build; the second moves 0.11 D towards the
     first. The pair's own shares (0 and 0.11) keep it, and the rods' pass gives the
@@ -391,6 +393,7 @@ def test_steps_in_one_call_equal_steps_one_by_one(dimension):
     np.testing.assert_array_equal(a.f, b.f)
 
 
+@pytest.mark.slow
 def test_short_trajectory_against_numpy_velocity_verlet():
     """Frictionless spheres: 200 steps of pysim against velocity Verlet written in
     NumPy with the reference forces of test_contacts (all pairs, no Verlet list)."""
@@ -557,6 +560,7 @@ def test_sphere_pass_is_the_same_bits_in_any_number_of_parts(rng, order):
     assert np.isfinite(res[0][0]).all() and res[0][5] > 100
 
 
+@pytest.mark.slow
 def test_pairs_skipped_by_the_motion_bound_change_nothing(rng):
     """The contact loop skips listed pairs that the motion bound keeps out of reach: after
     random translations, rotations and a box contraction the forces, torques, reactions

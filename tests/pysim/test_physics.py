@@ -240,6 +240,7 @@ def test_inverses_are_the_reciprocals_of_mass_and_inertia():
     np.testing.assert_array_equal(inv, 1.0 / np.column_stack([st.mass, st.inertia]))
 
 
+@pytest.mark.slow
 def test_compression_stage_plan_reaches_the_target():
     x, d, box = random_spheres(np.ones(200), 0.25, seed=2)
     st = State.spheres(x, d / 2, box)

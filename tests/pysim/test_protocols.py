@@ -52,6 +52,7 @@ def test_growth_to_jamming_of_spheres(tmp_path):
     assert set(cycles.step) <= steps
 
 
+@pytest.mark.slow
 def test_growth_of_rods_decides_every_relaxation(tmp_path):
     """3-D rods of alpha 1: every relaxation of the cycles settles (at a minimum, or at
     zero energy) inside its rounds, which FIRE alone did not do for rods
@@ -104,6 +105,7 @@ def test_rods_compress_writes_axes_and_lengths(tmp_path):
     assert 0.7 * (1 - 3 * 0.05 * 1e-4 * 500) <= th.phi.iloc[-1] <= 0.7
 
 
+@pytest.mark.slow
 def test_two_dimensional_compress(tmp_path):
     out = run_case(tmp_path, {
         "particles": {"n": 150, "dimension": 2, "aspect_ratio": 0.5,
@@ -118,6 +120,7 @@ def test_two_dimensional_compress(tmp_path):
     assert c.n > 150
 
 
+@pytest.mark.slow
 def test_jammed_disks_by_box_bisection(tmp_path):
     """Bidisperse disks: overdamped compression, then FIRE with box bisection to
     U/L^2 = 1e-15 (within a factor 2); a jammed, force-balanced, isostatic packing."""
@@ -181,6 +184,7 @@ def test_jammed_rods_end_at_a_minimum(tmp_path, alpha, seed):
     assert energy_density(sim, 1.0) > (1 - 1e-4) * e0
 
 
+@pytest.mark.slow
 def test_jammed_reports_unbalanced_forces_as_not_converged(tmp_path):
     """With far too few FIRE iterations per relaxation the forces never balance: the run
     says so (``force_balanced`` false) and does not call the state converged, whatever
@@ -304,6 +308,7 @@ def test_relaxation_rounds_stop_once_the_energy_settles(tmp_path, monkeypatch):
     assert res["converged"]
 
 
+@pytest.mark.slow
 def test_threads_option_sets_the_kernels_threads_and_keeps_the_bits(tmp_path):
     """``--threads`` (default 1, as the pipeline) is the number the run used, recorded in
     run.json; 1 and 2 threads write the same bits."""

@@ -39,6 +39,7 @@ def option(script: str, name: str) -> str:
     return found[-1]
 
 
+@pytest.mark.slow
 def test_readme_example_runs(tmp_path):
     script = example_script()
     assert ".venv/bin/python" in script
