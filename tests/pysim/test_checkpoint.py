@@ -11,10 +11,10 @@ import yaml
 
 from pysim import checkpoint
 from pysim.initial import write_initial
+from pysim.jit import get_threads, set_threads
 from pysim.records import CACHE_DTYPE, PARAMS_DTYPE
 from pysim.simulation import ContactModel, Simulation
 from pysim.state import State
-from pysim.walls import cylinder, plane
 from rodcase.case import validate_case
 from tests.cases import PYSIM_COMPRESS
 from tests.pysim.data import make_format1_checkpoints as format1
@@ -22,20 +22,7 @@ from tests.runs import pysim_run, start_mid_run
 
 
 def rods_in_a_tapped_cylinder():
-    rng = np.random.default_rng(3)
-    g = np.array([3.7, 6.3])
-    x = np.array([[a, b, 1.8 + 2.6 * k] for k in range(10) for a in g for b in g])
-    n = len(x)
-    ang = rng.normal(size=(n, 3))
-    ang /= np.linalg.norm(ang, axis=1, keepdims=True)
-    v = np.zeros((n, 3))
-    v[:, 2] = -6.0
-    st = State.create(x, 0.5, 1.5, np.array([10.0, 10.0, 40.0]), axis=ang, v=v,
-                      periodic=(False, False, False))
-    model = ContactModel("hooke", 1e5, 40.0, k_t=3e4, gamma_t=5.0, mu=0.5, gamma_bg=0.05)
-    return Simulation(st, model, dt=5e-5, gravity=(0, 0, -10),
-                      planes=[plane((0, 0, 1), (0, 0, 0), amp=0.05, omega_w=2 * np.pi * 30)],
-                      cylinders=[cylinder(5.0, 5.0, 4.5)])
+    return format1.scene("rods_tapped", amp=0.05)
 
 
 def assert_same(a: Simulation, b: Simulation):
@@ -161,8 +148,19 @@ def assert_continued(sim: Simulation, want) -> None:
     assert (sim.state.step, sim.state.time) == tuple(want["clock"])
 
 
+@pytest.fixture
+def one_thread():
+    """The format-1 fixtures were written on one thread (the thread count is a
+    parameter of the run: ``params.parts``)."""
+    before = get_threads()
+    set_threads(1)
+    yield
+    set_threads(before)
+
+
 @pytest.mark.parametrize("name", sorted(format1.SCENES))
-def test_a_format1_checkpoint_resumes_with_the_bits_of_the_code_that_wrote_it(name):
+def test_a_format1_checkpoint_resumes_with_the_bits_of_the_code_that_wrote_it(name,
+                                                                               one_thread):
     """A checkpoint written by the code of format 1 (tests/pysim/data, with what that code
     reached from it) loads into the records and continues with the same bits, which are
     also those of an uninterrupted run of this code."""
@@ -189,7 +187,8 @@ def test_a_format1_checkpoint_resumes_with_the_bits_of_the_code_that_wrote_it(na
         assert np.abs(sim.whist).max() > 0
 
 
-def test_an_earlier_format1_checkpoint_with_fewer_slots_resumes_with_a_new_list(tmp_path):
+def test_an_earlier_format1_checkpoint_with_fewer_slots_resumes_with_a_new_list(tmp_path,
+                                                                               one_thread):
     """Earlier checkpoints of format 1 hold the first slots only (the build state and the
     threads' bookkeeping came later) and no ``u_ref``: the records are completed, a new
     list is built, and the run goes on with the same bits."""

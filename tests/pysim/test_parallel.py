@@ -258,6 +258,30 @@ def dense_rods_with_friction(alpha_max=3.0):
     return Simulation(st, model, dt=5e-5)
 
 
+def on_one_and_two_threads(alpha_max, protocol):
+    """The same dense rods, ``protocol(sim)`` run on one thread and then on two."""
+    before = get_threads()
+    out = []
+    try:
+        for threads in (1, 2):
+            set_threads(threads)
+            sim = dense_rods_with_friction(alpha_max)
+            protocol(sim)
+            out.append(sim)
+    finally:
+        set_threads(before)
+    return out
+
+
+def assert_same_rods(a, b, arrays):
+    """In contact, with friction, and the same bits in the state and in ``arrays``."""
+    assert a.thermo().n_contacts > 50 and np.abs(a.hist).max() > 0
+    for k in ("x", "v", "q", "omega"):
+        np.testing.assert_array_equal(getattr(a.state, k), getattr(b.state, k), err_msg=k)
+    for k in arrays:
+        np.testing.assert_array_equal(getattr(a, k), getattr(b, k), err_msg=k)
+
+
 @pytest.mark.slow
 @pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 Numba threads")
 @pytest.mark.parametrize("alpha_max", [3.0, 0.0])
@@ -265,22 +289,11 @@ def test_one_and_two_threads_give_identical_bits(alpha_max):
     """One thread adds the reactions inside the contact pass (rows in order), two store
     them per pair and gather them: the same sums in the same order, the same bits, for
     rods and for spheres."""
-    before = get_threads()
-    out = []
-    try:
-        for threads in (1, 2):
-            set_threads(threads)
-            sim = dense_rods_with_friction(alpha_max)
-            sim.run(1500, strain_rate=-3.0)
-            out.append(sim)
-    finally:
-        set_threads(before)
-    a, b = out
-    assert a.thermo().n_contacts > 50 and np.abs(a.hist).max() > 0
-    for k in ("x", "v", "q", "omega"):
-        np.testing.assert_array_equal(getattr(a.state, k), getattr(b.state, k), err_msg=k)
-    for k in ("f", "torque", "virial", "hist", "pi", "pj"):
-        np.testing.assert_array_equal(getattr(a, k), getattr(b, k), err_msg=k)
+    def compress(sim):
+        sim.run(1500, strain_rate=-3.0)
+
+    a, b = on_one_and_two_threads(alpha_max, compress)
+    assert_same_rods(a, b, ("f", "torque", "virial", "hist", "pi", "pj"))
     assert a._pe == b._pe
 
 
@@ -292,26 +305,15 @@ def test_a_run_after_fire_rebuilt_the_list_gives_the_bits_of_one_thread(alpha_ma
     the threads' shared-particle flags kept for the old one are found again (with FIRE on
     a copy of the cache, the next run kept the old list's flags: on two threads some
     reactions were added twice or lost)."""
-    before = get_threads()
-    out = []
-    try:
-        for threads in (1, 2):
-            set_threads(threads)
-            sim = dense_rods_with_friction(alpha_max)
-            sim.run(1500, strain_rate=-3.0)
-            pj = sim.pj
-            sim.minimize(1e-9, max_iter=2000)
-            assert sim.pj is not pj  # FIRE rebuilt the list
-            sim.run(300, strain_rate=-3.0)
-            out.append(sim)
-    finally:
-        set_threads(before)
-    a, b = out
-    assert a.thermo().n_contacts > 50 and np.abs(a.hist).max() > 0
-    for k in ("x", "v", "q", "omega"):
-        np.testing.assert_array_equal(getattr(a.state, k), getattr(b.state, k), err_msg=k)
-    for k in ("f", "torque", "virial", "hist"):
-        np.testing.assert_array_equal(getattr(a, k), getattr(b, k), err_msg=k)
+    def compress_fire_compress(sim):
+        sim.run(1500, strain_rate=-3.0)
+        pj = sim.pj
+        sim.minimize(1e-9, max_iter=2000)
+        assert sim.pj is not pj  # FIRE rebuilt the list
+        sim.run(300, strain_rate=-3.0)
+
+    a, b = on_one_and_two_threads(alpha_max, compress_fire_compress)
+    assert_same_rods(a, b, ("f", "torque", "virial", "hist"))
 
 
 @pytest.mark.parametrize("alpha_max", [3.0, 0.0])

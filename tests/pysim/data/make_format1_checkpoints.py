@@ -31,8 +31,9 @@ CONTINUED = ("x", "v", "q", "u", "omega", "radius", "length", "mass", "inertia",
 SIM_CONTINUED = ("f", "torque", "virial", "hist", "whist", "wall_force")
 
 
-def scene(name: str) -> Simulation:
-    """The scene's simulation at step 0 (the same in old and new code)."""
+def scene(name: str, amp: float = 0.003) -> Simulation:
+    """The scene's simulation at step 0 (the same in old and new code); ``amp``: the
+    base's vibration amplitude in ``rods_tapped``."""
     rng = np.random.default_rng(3)
     if name == "rods_tapped":  # walls, wall springs, gravity, drag, rods with friction
         g = np.array([3.7, 6.3])
@@ -45,7 +46,7 @@ def scene(name: str) -> Simulation:
                           periodic=(False, False, False))
         model = ContactModel("hooke", 1e5, 40.0, k_t=3e4, gamma_t=5.0, mu=0.5, gamma_bg=0.05)
         return Simulation(st, model, dt=5e-5, gravity=(0, 0, -10),
-                          planes=[plane((0, 0, 1), (0, 0, 0), amp=0.003, omega_w=2 * np.pi * 30)],
+                          planes=[plane((0, 0, 1), (0, 0, 0), amp=amp, omega_w=2 * np.pi * 30)],
                           cylinders=[cylinder(5.0, 5.0, 4.5)])
     if name == "spheres_compressed":  # periodic spheres, friction, drags set after the start
         x, d, box = random_spheres(rng.choice([0.8, 1.0], 200), 0.33, seed=5)
