@@ -60,6 +60,8 @@ class RunFiles:
                                   f"records ({size}); rerun from the start")
             with open(part, "r+b") as fh:
                 fh.truncate(size)
+                # the cut reaches the disk before the run appends over the freed space
+                os.fsync(fh.fileno())
         self.fh = {k: open(io.part_path(p), "a") for k, p in self.paths.items()}
         return sim, extra.get("driver", {})
 
