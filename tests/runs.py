@@ -5,7 +5,10 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import yaml
+
+from analysis.io import RunData
 
 from pysim.initial import write_initial
 from rodcase.case import validate_case
@@ -56,3 +59,30 @@ def prepared(tmp_path_factory, name, case):
     case = validate_case(case)
     write_initial(case, d / "init.data")
     return case, d
+
+
+def assert_in_the_tapped_container(frames, case, tp, D):
+    """Every frame of a tapping run (``(frame, contacts)`` pairs): all the rods, each
+    spine end with its radius inside the cylinder and above the moving base of plan
+    ``tp``, and every overlap, up to 0.05 ``D``."""
+    rc = 0.5 * case["container"]["diameter"]
+    for f, contacts in frames:
+        assert f.n == case["particles"]["n"]
+        ends = np.concatenate([f.x + 0.5 * f.length[:, None] * f.axis,
+                               f.x - 0.5 * f.length[:, None] * f.axis])
+        r = np.tile(f.radius, 2)
+        assert np.all(np.hypot(ends[:, 0], ends[:, 1]) + r < rc + 0.05 * D)
+        assert np.all(ends[:, 2] - r > tp.base_height(f.step) - 0.05 * D)
+        assert np.all(contacts.overlap < 0.05 * D)
+
+
+def assert_resumed_like_uninterrupted(thermo, full, restart_step):
+    """A run resumed from its restart at ``restart_step`` (its ``thermo``) against the
+    uninterrupted run in ``full``: the same kinetic energy, bit for bit, up to the restart,
+    and within 5 % in the next two rows (a tapping base's phase goes on, not restarted)."""
+    ref = RunData(full).thermo.set_index("step")
+    mine = thermo.set_index("step")
+    before = mine.index[mine.index <= restart_step]
+    np.testing.assert_array_equal(mine.loc[before, "ke"], ref.loc[before, "ke"])
+    after = mine.index[mine.index > restart_step][:2]
+    np.testing.assert_allclose(mine.loc[after, "ke"], ref.loc[after, "ke"], rtol=0.05)

@@ -11,7 +11,7 @@ from pysim.protocols.tapping import plan, settle_drag
 from pysim.simulation import ContactModel
 from tests.cases import TAP, TAP_D as D
 from tests.pysim.helpers import collide, two_spheres
-from tests.runs import run_case
+from tests.runs import assert_in_the_tapped_container, run_case
 from rodcase.case import restitution_law, validate_case
 
 
@@ -79,16 +79,7 @@ def test_tapping_run_keeps_grains_in_the_container(tapped):
     run = RunData(out)
     frames = run.frames()
     assert [f.step for f, _ in frames] == list(tp.frame_steps)
-    rc = 0.5 * case["container"]["diameter"]
-    for f, contacts in frames:
-        assert f.n == case["particles"]["n"]
-        ends = np.concatenate([f.x + 0.5 * f.length[:, None] * f.axis,
-                               f.x - 0.5 * f.length[:, None] * f.axis])
-        r = np.tile(f.radius, 2)
-        # every spine end inside the cylinder and above the base, up to a small overlap
-        assert np.all(np.hypot(ends[:, 0], ends[:, 1]) + r < rc + 0.05 * D)
-        assert np.all(ends[:, 2] - r > tp.base_height(f.step) - 0.05 * D)
-        assert np.all(contacts.overlap < 0.05 * D)
+    assert_in_the_tapped_container(frames, case, tp, D)
     th = run.thermo
     assert th.phi.isna().all() and np.isfinite(th.ke).all()
     settled = th[(th.step > tp.settle_steps) & (th.step <= tp.start)]

@@ -11,7 +11,8 @@ import yaml
 from analysis.io import RunData
 from analysis.summary import analyse_tapping
 from pysim.protocols.tapping import plan
-from tests.runs import prepared
+from tests.runs import (assert_in_the_tapped_container, assert_resumed_like_uninterrupted,
+                        prepared)
 from tests.cases import TAP, TAP_D as D
 from workflows import engines
 from rodcase.case import validate_case
@@ -39,17 +40,10 @@ def test_lammps_tapping_deck(tap_case, tmp_path):
     run = RunData(tmp_path / "lammps")
     frames = run.frames()
     assert [f.step for f, _ in frames] == list(tp.frame_steps)
-    rc = 0.5 * case["container"]["diameter"]
-    for f, contacts in frames:
-        assert f.n == case["particles"]["n"]
+    for f, _ in frames:
         np.testing.assert_allclose(f.length, 2 * D, rtol=1e-6)
-        # glued spheres reach the spherocylinder's ends: the same wall tests as pysim
-        ends = np.concatenate([f.x + 0.5 * f.length[:, None] * f.axis,
-                               f.x - 0.5 * f.length[:, None] * f.axis])
-        r = np.tile(f.radius, 2)
-        assert np.all(np.hypot(ends[:, 0], ends[:, 1]) + r < rc + 0.05 * D)
-        assert np.all(ends[:, 2] - r > tp.base_height(f.step) - 0.05 * D)
-        assert np.all(contacts.overlap < 0.05 * D)
+    # glued spheres reach the spherocylinder's ends: the same wall tests as pysim
+    assert_in_the_tapped_container(frames, case, tp, D)
     th = run.thermo
     assert th.step.is_unique and th.phi.isna().all() and np.isfinite(th.ke).all()
 
@@ -110,9 +104,4 @@ def test_lammps_tapping_resumes_mid_tap(tap_case, tmp_path):
     # taps shake the packing the same way (base phase continued, not restarted)
     full = tmp_path / "full"
     engines.run("lammps", case, d / "init.data", full, timeout=600)
-    ref = RunData(full).thermo.set_index("step")
-    mine = th.set_index("step")
-    before = mine.index[mine.index <= restarts[-1]]
-    np.testing.assert_array_equal(mine.loc[before, "ke"], ref.loc[before, "ke"])
-    after = mine.index[mine.index > restarts[-1]][:2]
-    np.testing.assert_allclose(mine.loc[after, "ke"], ref.loc[after, "ke"], rtol=0.05)
+    assert_resumed_like_uninterrupted(th, full, restarts[-1])
