@@ -1,5 +1,6 @@
 """pysim runs through its command line (``python -m pysim run``), for the tests that check
-a run's files, its signals and its resume."""
+a run's files, its signals and its resume; and the checks of a tapping run that every
+engine's tests share."""
 import signal
 import subprocess
 import sys
@@ -9,7 +10,6 @@ import numpy as np
 import yaml
 
 from analysis.io import RunData
-
 from pysim.initial import write_initial
 from rodcase.case import validate_case
 
