@@ -103,6 +103,7 @@ def _run(case, init, args) -> int:
     import pysim
     from pysim.jit import get_threads
     from pysim.protocols import compress, deposit, growth, jammed, tapping
+    from pysim.protocols.contraction import ContractionJammedError
     from pysim.protocols.output import ResumeError
     from pysim.simulation import BlowUpError
     from rodcase import record
@@ -116,7 +117,7 @@ def _run(case, init, args) -> int:
     except ResumeError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    except (BlowUpError, growth.GrowthLimitError, tapping.SettleError,
+    except (BlowUpError, growth.GrowthLimitError, ContractionJammedError, tapping.SettleError,
             deposit.FeedBlockedError, deposit.NotSettledError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 3

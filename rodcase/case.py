@@ -323,6 +323,10 @@ def _check_case(case: dict, source: str, at: str):
     if pr["name"] == "growth" and pr["phi_grow"] <= pr["phi_init"]:
         raise ConfigError(f"{source}: {at}protocol.phi_grow = {pr['phi_grow']} must be above "
                           f"phi_init = {pr['phi_init']}")
+    if pr["name"] == "growth" and "contraction" in pr and not (
+            pr["phi_init"] < pr["contraction"]["phi"] < pr["phi_grow"]):
+        raise ConfigError(f"{source}: {at}protocol.contraction.phi = "
+                          f"{pr['contraction']['phi']} must lie between phi_init = {pr['phi_init']} and phi_grow = {pr['phi_grow']}")
     if pr["name"] == "growth" and pr["phi_grow"] >= pr["phi_max"]:
         raise ConfigError(f"{source}: {at}protocol.phi_grow = {pr['phi_grow']} must be below "
                           f"phi_max = {pr['phi_max']}")

@@ -1,5 +1,8 @@
 """Growth to jamming (science.md section 4, the 3-D random-packing study).
 
+0. **Contract** (only with ``contraction``): from the random start at ``phi_init``,
+   mechanical contraction to ``contraction.phi`` (:mod:`pysim.protocols.contraction`),
+   the start of Wouterse, Luding and Philipse; growth then starts from rest there.
 1. **Grow**: from the random start at ``phi_init`` every ``D`` and ``L`` grows as
    ``exp(rate t)`` (aspect ratio fixed) under velocity Verlet with the case's damping,
    until ``phi_grow``; thermo rows and dumps as in the compression driver.
@@ -31,6 +34,7 @@ import numpy as np
 from tqdm import tqdm
 
 from pysim import checkpoint
+from pysim.protocols.contraction import contract
 from pysim.protocols.compress import max_overlap, model_from_case, state_from_init
 from pysim.protocols.jammed import relax, residuals
 from pysim.protocols.output import RunFiles
@@ -87,17 +91,41 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
                          skin=0.2 * 2.0 * float(np.max(state.radius)),
                          max_overlap=max_overlap(case))
         files.start()
-        drv = {"phase": "grow", "lo": None, "hi": None, "increment": p["increment"]}
+        drv = {"phase": "contract" if "contraction" in p else "grow", "lo": None,
+               "hi": None, "increment": p["increment"], "grow_from": 0,
+               "phi_start": p["phi_init"]}
     s = sim.state
     k_n = case["contact"]["k_n"]
     outp = case.get("output", {})
     thermo_every = int(outp.get("thermo_every", 1000))
     dump_every = int(outp.get("dump_every", 4000))
-    n_grow = round(math.log(p["phi_grow"] / p["phi_init"]) / (s.dimension * p["rate"] * p["dt"]))
     t0 = time.perf_counter()
     last_ckpt = t0
-    bar = tqdm(total=n_grow, initial=min(s.step, n_grow), disable=not progress, unit="step",
-               mininterval=1.0, desc="pysim growth", dynamic_ncols=True)
+    if drv["phase"] == "contract":
+        if s.step == 0:
+            files.dump(sim)
+        mcm = p["contraction"]
+        with tqdm(total=math.ceil((mcm["phi"] - s.packing_fraction()) / mcm["increment"]),
+                  disable=not progress, unit="step", desc="pysim contraction",
+                  mininterval=1.0, dynamic_ncols=True) as cbar:
+            def contracted(sim_, iterations):
+                files.thermo(sim_.thermo().row())
+                cbar.update(1)
+                cbar.set_postfix(phi=f"{sim_.state.packing_fraction():.4f}", refresh=False)
+
+            contract(sim, mcm["phi"], mcm["increment"], k_n, p["force_tol"],
+                     p["energy_tol"], p["max_relax"], on_step=contracted)
+        files.dump(sim)
+        drv.update(phase="grow", grow_from=s.step, phi_start=s.packing_fraction())
+        files.checkpoint(sim, drv)
+        last_ckpt = time.perf_counter()
+    # older checkpoints lack the growth's start: they grew from phi_init at step 0
+    grow_from = drv.get("grow_from", 0)
+    n_grow = grow_from + round(math.log(p["phi_grow"] / drv.get("phi_start", p["phi_init"]))
+                               / (s.dimension * p["rate"] * p["dt"]))
+    bar = tqdm(total=n_grow - grow_from, initial=min(s.step, n_grow) - grow_from,
+               disable=not progress, unit="step", mininterval=1.0, desc="pysim growth",
+               dynamic_ncols=True)
 
     def d_now():
         return float(np.mean(2 * s.radius))

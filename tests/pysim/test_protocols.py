@@ -1,4 +1,5 @@
 """Protocol drivers end to end through the CLI, on small systems."""
+import json
 import subprocess
 import sys
 
@@ -336,3 +337,65 @@ def test_threads_option_sets_the_kernels_threads_and_keeps_the_bits(tmp_path):
     assert sorted(outs) == [1, 2]
     for name in ("particles.dump", "contacts.dump", "thermo.dat"):
         assert (outs[1] / name).read_bytes() == (outs[2] / name).read_bytes(), name
+
+
+def _contraction_sim(tmp_path, n, seed, alpha=0.0, phi_init=0.2):
+    from pysim.io import read_particle_data
+    from pysim.protocols.compress import max_overlap, model_from_case, state_from_init
+    from pysim.simulation import Simulation
+
+    case = validate_case(growth_case(n, seed, alpha=alpha, phi_init=phi_init, phi_grow=0.6))
+    write_initial(case, tmp_path / "init.data")
+    state = state_from_init(case, read_particle_data(tmp_path / "init.data"))
+    return Simulation(state, model_from_case(case), dt=1e-4,
+                      skin=0.2 * 2.0 * float(np.max(state.radius)),
+                      max_overlap=max_overlap(case))
+
+
+@pytest.mark.parametrize("alpha", [0.0, 1.5])
+def test_contraction_ends_overlap_free_at_rest_on_its_target(tmp_path, alpha):
+    """The mechanical contraction lands exactly on its packing fraction, with no overlap
+    left (energy below the criterion) and every particle at rest; each step is reported."""
+    from pysim.protocols.contraction import contract
+
+    sim = _contraction_sim(tmp_path, 120, 4, alpha)
+    steps = []
+    contract(sim, 0.49, 0.02, 1e5, 1e-9, 1e-12, 20000,
+             on_step=lambda t, it: steps.append(t.state.packing_fraction()))
+    s = sim.state
+    assert s.packing_fraction() == pytest.approx(0.49, rel=1e-12)
+    assert len(steps) == 15 and steps[0] == pytest.approx(0.22)  # 0.20 -> 0.49 by 0.02
+    assert sim.thermo().pe / (s.n * 1e5) < 1e-12
+    assert np.all(s.v == 0) and np.all(s.omega == 0)
+
+
+def test_contraction_past_jamming_stops_with_the_density_it_reached(tmp_path):
+    """Spheres cannot be contracted overlap-free to 0.70 (above random close packing):
+    the error names where the contraction jammed and the target."""
+    from pysim.protocols.contraction import ContractionJammedError, contract
+
+    sim = _contraction_sim(tmp_path, 60, 5, phi_init=0.3)
+    with pytest.raises(ContractionJammedError, match=r"jammed at phi = 0\.(6[0-9]|70).*"
+                                                     r"contraction\.phi = 0\.7"):
+        contract(sim, 0.70, 0.02, 1e5, 1e-9, 1e-12, 2000)
+
+
+def test_growth_from_a_contracted_start(tmp_path):
+    """With ``contraction`` the growth starts from rest at the contracted density: the
+    first frames are the random start and the contracted packing, and the continuous
+    growth then runs its planned steps from there."""
+    out = run_case(tmp_path, growth_case(100, 6, phi_init=0.2, rate=0.5, phi_grow=0.56,
+                                         increment=0.02, tolerance=5e-3,
+                                         contraction={"phi": 0.45, "increment": 0.05}))
+    frames = RunData(out).frames()
+    th = RunData(out).thermo
+    contracted = th[th.phi.round(9) == 0.45]
+    assert len(contracted) == 1 and contracted.ke.iloc[0] == 0
+    assert frames[0][0].step == 0 and frames[1][0].step == contracted.step.iloc[0]
+    assert 0.60 < json.loads((out / "run.json").read_text())["phi_j"] < 0.67
+
+
+def test_contraction_above_phi_grow_is_refused():
+    with pytest.raises(Exception, match=r"contraction\.phi = 0\.6 must lie between "
+                                        r"phi_init = 0\.3 and phi_grow = 0\.55"):
+        validate_case(growth_case(50, 1, phi_grow=0.55, contraction={"phi": 0.6}))
