@@ -165,3 +165,24 @@ def test_growing_frames_keep_the_growth_and_the_jammed_end():
     assert growing_frames(cv).step.tolist() == [0, 10, 20, 40]
     assert growing_frames(cv.drop(columns=["relaxed", "jammed"])).step.tolist() == \
         [0, 10, 20, 50, 40, 30]
+
+
+def test_growth_figure_writes_a_png(tmp_path, rng):
+    """Fig. 2, 6 and 3 of the paper in one figure, for two rates and three densities."""
+    from analysis.plots import growth_curves
+
+    runs = []
+    for k, width in enumerate((0.002, 0.006)):
+        phi, c, _answer = rod_curve(rng, width=width)
+        cv = pd.DataFrame({"phi": phi, "z": c, "noncaged_fraction": np.clip(1 - c / 10, 0, 1)})
+        phi_b, c_b = jump_onset(phi, c)
+        runs.append({"label": f"rate {k}", "curves": cv, "phi_before_jump": phi_b,
+                     "c_mean_before_jump": c_b, "phi_j": 0.43})
+    pc = pd.concat([pd.DataFrame({"step": s, "phi": f, "c": np.arange(12),
+                                  "fraction": np.exp(-0.5 * (np.arange(12) - m) ** 2) / 2.5})
+                    for s, f, m in ((0, 0.35, 3), (1, 0.40, 6), (2, 0.43, 9.5))])
+    out = tmp_path / "figs" / "growth.png"
+    growth_curves(runs, out, pc=pc, title="alpha = 11")
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    growth_curves(runs[:1], tmp_path / "two_panels.png")
+    assert (tmp_path / "two_panels.png").stat().st_size > 1000
