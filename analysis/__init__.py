@@ -11,7 +11,9 @@ read results) or pure functions on plain arrays:
   histograms, ``Q(r)``
 * :mod:`analysis.stress`   particle, box, slab and element stress, principal axes, walls
 * :mod:`analysis.janssen`  Janssen fits; :mod:`analysis.jamming` the jamming point
-* :mod:`analysis.theory`   closed-form references; :mod:`analysis.caging` caging numbers
+* :mod:`analysis.theory`   closed-form references; :mod:`analysis.caging` caging numbers;
+  :mod:`analysis.cages` caged particles of a frame
+* :mod:`analysis.growth`   growth curves: the jump of ``<C>(phi)``, rate independence
 * :mod:`analysis.geometry` spherocylinder geometry; :mod:`analysis.walls` wall contacts
 
 See docs/analysis.md for the equations and figures.

@@ -41,6 +41,22 @@ def contact_counts(n: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
     return (np.bincount(i, minlength=n) + np.bincount(j, minlength=n)).astype(np.int64)
 
 
+def contact_number_distribution(frame: Frame, contacts: Contacts) -> np.ndarray:
+    """``P(C)`` of one frame (Wouterse, Luding & Philipse, Fig. 3): the fraction of the
+    ``N`` particles with ``C = 0, 1, ..., max C`` contacts, where ``C`` counts the other
+    particles a particle touches with a positive overlap (a pair listed twice counts
+    once); rattlers are included, wall rows (``j <= 0``) left out. The mean of the
+    distribution is ``<C> = 2 N_c / N`` over those pairs. (:class:`ContactNumber`'s
+    ``distribution`` counts rows and walls too.)"""
+    pp, _walls = split_wall_contacts(frame, contacts)
+    touch = np.asarray(pp.overlap) > 0
+    a = frame.index_of(pp.i[touch])
+    b = frame.index_of(pp.j[touch])
+    pairs = np.unique(np.column_stack([np.minimum(a, b), np.maximum(a, b)]), axis=0)
+    c = contact_counts(frame.n, pairs[:, 0], pairs[:, 1])
+    return np.bincount(c, minlength=1) / frame.n if frame.n else np.zeros(1)
+
+
 def remove_rattlers(n: int, i: np.ndarray, j: np.ndarray, c_min: int,
                     fixed: np.ndarray | None = None) -> np.ndarray:
     """Boolean mask (n,) of rattlers: particles left with fewer than ``c_min`` contacts

@@ -884,3 +884,60 @@ def engine_differences(cmp, out, max_rows: int = 60):
     ax.legend(fontsize=6, loc="lower right")
     fig.tight_layout()
     _save(fig, out)
+
+
+def growth_curves(runs, out, pc=None, title=None):
+    """Curves of growth runs after Wouterse, Luding & Philipse: the mean contact number
+    ``<C>`` (rattlers included) against ``phi`` (their Fig. 2) and the fraction of
+    non-caged particles against ``phi`` (Fig. 6), one line per run (e.g. per growth
+    rate), and, with ``pc``, the contact-number distributions of a few frames as bars
+    (Fig. 3).
+
+    ``runs``: dicts with ``label`` and ``curves`` (the growing frames,
+    :func:`analysis.growth.growing_frames`: ``phi``, ``z``, ``noncaged_fraction``), and
+    optionally ``phi_before_jump`` and ``c_mean_before_jump`` (a marker where the rods'
+    jump of ``<C>`` starts) and ``phi_j`` (a vertical line). ``pc``: a table with
+    ``step``, ``phi``, ``c``, ``fraction`` (:func:`analysis.summary.pc_table` of one run),
+    one group of bars per frame.
+    """
+    panels = 2 + (pc is not None and len(pc) > 0)
+    fig, axes = plt.subplots(1, panels, figsize=(5.0 * panels, 4.0), squeeze=False)
+    ax_c, ax_n = axes[0, 0], axes[0, 1]
+    cmap = plt.get_cmap("viridis", max(len(runs), 2))
+    for k, r in enumerate(runs):
+        cv = r["curves"].sort_values("phi")
+        colour = cmap(k)
+        ax_c.plot(cv.phi, cv.z, marker="o", ms=2.5, lw=1.0, color=colour, label=r["label"])
+        if "noncaged_fraction" in cv:
+            ax_n.plot(cv.phi, cv.noncaged_fraction, marker="o", ms=2.5, lw=1.0, color=colour,
+                      label=r["label"])
+        c_b = r.get("c_mean_before_jump", np.nan)
+        if np.isfinite(c_b):
+            ax_c.plot([r["phi_before_jump"]], [c_b], marker="D", ms=7, mfc="none",
+                      color=colour)
+        if np.isfinite(r.get("phi_j", np.nan)):
+            for ax in (ax_c, ax_n):
+                ax.axvline(r["phi_j"], color=colour, lw=0.6, ls=":")
+    ax_c.set_xlabel(r"packing fraction $\phi$")
+    ax_c.set_ylabel(r"mean contact number $\langle C\rangle$ (rattlers included)")
+    ax_c.set_title("diamond: where the jump of <C> starts; dotted: phi_J", fontsize=9)
+    ax_c.legend(fontsize=7)
+    ax_n.set_xlabel(r"packing fraction $\phi$")
+    ax_n.set_ylabel("fraction of non-caged particles")
+    ax_n.set_ylim(-0.02, 1.02)
+    if panels == 3:
+        ax_p = axes[0, 2]
+        steps = list(dict.fromkeys(pc.step))
+        width = 0.8 / len(steps)
+        pcmap = plt.get_cmap("plasma", len(steps) + 1)
+        for q, st in enumerate(steps):
+            part = pc[pc.step == st]
+            ax_p.bar(part.c + (q - (len(steps) - 1) / 2) * width, part.fraction, width=width,
+                     color=pcmap(q), label=f"$\\phi$ = {part.phi.iloc[0]:.3f}")
+        ax_p.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
+        ax_p.set_xlabel("contacts per particle $C$")
+        ax_p.set_ylabel("$P(C)$")
+        ax_p.legend(fontsize=7)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    _save(fig, out)

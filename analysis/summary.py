@@ -33,16 +33,25 @@ TIDY_COLUMNS = ["study", "case", "engine", "seed", "observable", "value", "uncer
 STRESS_COLUMNS = {2: 4, 3: 2}
 
 
-def frame_curves(run: RunData, c_min: int | None = None, friction: float = 0.0) -> pd.DataFrame:
+def frame_curves(run: RunData, c_min: int | None = None, friction: float = 0.0,
+                 caging: bool = False) -> pd.DataFrame:
     """Per output frame: ``phi``, contact ``pressure`` (from the contact table), ``z``,
     ``z_rattler_free``, ``z_bonds`` (2-D: parallel side contacts twice), ``n_rattlers``,
     and for rods the nematic order ``s_nematic`` (3-D) or ``sqrt(N) S_2``, ``sqrt(N) S_4``
     (2-D). Rattlers follow the rule for the frame and the packing's ``friction``
     (:class:`analysis.contacts.ContactNumber`, ``c_min`` overrides it); the rule in words
-    is ``attrs["rattler_rule"]``."""
+    is ``attrs["rattler_rule"]``; ``attrs["rods"]``: whether any frame holds a rod.
+
+    ``caging``: also ``noncaged_fraction``, the fraction of particles whose contacts in
+    the frame do not cage them (:class:`analysis.cages.CagedParticles`; about 0.3 s per
+    frame of 2048 jammed particles)."""
+    from analysis.cages import CagedParticles
+
     rows = []
     rule = ""
+    rods = False
     for frame, contacts in run.frames():
+        rods = rods or bool(np.any(frame.length > 0))
         counter = ContactNumber(c_min, friction=friction)
         rule = counter.describe(frame)
         cn = counter.compute(frame, contacts)
@@ -59,10 +68,44 @@ def frame_curves(run: RunData, c_min: int | None = None, friction: float = 0.0) 
                 row["sqrt_n_s2"], row["sqrt_n_s4"] = o2.sqrtN_S2, o2.sqrtN_S4
             else:
                 row["s_nematic"] = NematicOrder().compute(frame).S
+        if caging:
+            row["noncaged_fraction"] = CagedParticles().compute(frame, contacts).noncaged_fraction
         rows.append(row)
     curves = pd.DataFrame(rows)
     curves.attrs["rattler_rule"] = rule
+    curves.attrs["rods"] = rods
     return curves
+
+
+def pc_table(run: RunData, phis=None) -> pd.DataFrame:
+    """Contact-number distributions ``P(C)`` of a run's frames (Wouterse, Luding &
+    Philipse, Fig. 3; :func:`analysis.contacts.contact_number_distribution`: every
+    touching partner, rattlers included, walls not): a table with columns ``step``,
+    ``phi``, ``c``, ``fraction`` (``c = 0 .. max C`` of each frame), ready for a
+    ``pc.csv``. Every frame, or with ``phis`` the frame nearest in ``phi`` to each of
+    them (each frame once, in the order of ``phis``)."""
+    from analysis.contacts import contact_number_distribution
+
+    frames = run.frames()
+    columns = ["step", "phi", "c", "fraction"]
+    if not frames:
+        return pd.DataFrame(columns=columns)
+    phi = np.array([packing_fraction(f) for f, _c in frames])
+    if phis is None:
+        pick = list(range(len(frames)))
+    else:
+        pick = []
+        for target in np.atleast_1d(np.asarray(phis, dtype=float)):
+            k = int(np.argmin(np.abs(phi - target)))
+            if k not in pick:
+                pick.append(k)
+    parts = []
+    for k in pick:
+        frame, contacts = frames[k]
+        dist = contact_number_distribution(frame, contacts)
+        parts.append(pd.DataFrame({"step": frame.step, "phi": phi[k],
+                                   "c": np.arange(len(dist)), "fraction": dist}))
+    return pd.concat(parts, ignore_index=True)[columns]
 
 
 #: frames above the jamming point whose contact numbers are extrapolated to it
@@ -140,15 +183,19 @@ def _intercept(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
 
 def problems(rows, curves: pd.DataFrame | None = None) -> list[str]:
     """One-line warnings a reader of a run's observables must see: the observables that
-    are NaN (the nematic order of spheres, which have none, aside), and the frames at or
+    are NaN (the nematic order and the jump of ``<C>`` of spheres, which have none,
+    aside), and the frames at or
     above the jamming point (all frames when there is none) in which every grain is a
     rattler (the rule, ``curves.attrs["rattler_rule"]``, removed the whole packing)."""
     values = {name: v for name, v, _err in rows}
     out = []
     no_rods = (curves is not None and "s_nematic" in curves
                and not np.isfinite(curves["s_nematic"].to_numpy(dtype=float)).any())
+    # spheres have no jump of <C> (frame_curves marks runs without rods)
+    spheres = curves is not None and curves.attrs.get("rods") is False
     bad = [name for name, v in values.items() if isinstance(v, (int, float, np.floating))
-           and not np.isfinite(v) and not (no_rods and name.startswith("s_nematic"))]
+           and not np.isfinite(v) and not (no_rods and name.startswith("s_nematic"))
+           and not (spheres and name in ("c_mean_before_jump", "phi_before_jump"))]
     if bad:
         out.append(f"observable{'s' if len(bad) > 1 else ''} {', '.join(bad)} "
                    f"{'are' if len(bad) > 1 else 'is'} NaN")
@@ -213,14 +260,26 @@ def analyse_growth(run_dir, c_min: int | None = None, friction: float = 0.0):
     minimum, 0 when it ran out of rounds with the energy still falling (a jammed decision
     without proof; NaN for older runs, whose files lack the column: docs/formats.md).
     Curves: every output frame, with ``relaxed`` and ``jammed`` flags for the frames of
-    the relax/increment cycles.
+    the relax/increment cycles and the ``noncaged_fraction`` of each frame
+    (:func:`frame_curves`; the contact-number distributions of chosen frames:
+    :func:`pc_table`).
+
+    Along the growing packing (Wouterse, Luding & Philipse, Figs. 2 and 6; the frames of
+    :func:`analysis.growth.growing_frames`): ``c_mean_before_jump`` and
+    ``phi_before_jump``, the mean contact number ``z`` (rattlers included) where its
+    sharp rise towards the jammed value starts and the packing fraction there
+    (:func:`analysis.growth.jump_onset`; NaN for spheres, which have no jump, and where
+    no rise of 2 contacts is found), and ``noncaged_fraction_j``, the fraction of
+    non-caged particles of the jammed packing at ``phi_j``.
     """
+    from analysis.growth import growing_frames, jump_onset
+
     run = RunData(run_dir)
     thermo = run.thermo
     cycles = pd.read_csv(Path(run_dir) / "cycles.dat", sep=r"\s+", comment="#", header=None,
                          names=["step", "phi", "e", "p", "nc", "jammed", "iterations",
                                 "residual", "settled"])  # older files lack the last three
-    curves = frame_curves(run, c_min, friction)
+    curves = frame_curves(run, c_min, friction, caging=True)
     curves["relaxed"] = curves.step.isin(cycles.step)
     curves["jammed"] = curves.step.isin(cycles.step[cycles.jammed == 1])
     jam = cycles[cycles.jammed == 1]
@@ -242,6 +301,13 @@ def analyse_growth(run_dir, c_min: int | None = None, friction: float = 0.0):
                                                "rattler_fraction_j", "phi_at_z_j", "s_nematic_j",
                                                "residual_j", "settled_j")]
     rows += [("relax_cycles", float(len(cycles)), np.nan)]
+    at_j = curves[curves.step == hi.step] if len(jam) and len(free) else curves.iloc[0:0]
+    rows.append(("noncaged_fraction_j",
+                 float(at_j.noncaged_fraction.iloc[0]) if len(at_j) else np.nan, np.nan))
+    growing = growing_frames(curves)
+    rods = curves.attrs["rods"]
+    phi_b, c_b = jump_onset(growing.phi, growing.z) if rods else (np.nan, np.nan)
+    rows += [("c_mean_before_jump", c_b, np.nan), ("phi_before_jump", phi_b, np.nan)]
     return rows, curves, thermo
 
 def tidy(rows, study, case, engine, seed, parameters: dict | None = None) -> pd.DataFrame:

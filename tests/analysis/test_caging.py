@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
 
-from analysis.caging import (CagingNumber, cage_certificate, constraint_rows, default_dofs,
-                             is_caged, surface_contacts, wendel_caging_number, _dof_index)
+from analysis.caging import (CagingNumber, cage_certificate, constraint_rows, decide_caged,
+                             default_dofs, is_caged, surface_contacts, wendel_caging_number,
+                             _dof_index)
 
 
 def test_wendel_values():
@@ -145,3 +146,57 @@ def test_impossible_freedoms_are_refused():
         CagingNumber(length=0.0, dofs=("tx", "rx"))
     with pytest.raises(ValueError, match="unknown degrees"):
         CagingNumber(dim=2, length=1.0, dofs=("tz",))
+
+
+@pytest.mark.parametrize("dim,length,axial", [(3, 0.0, False), (3, 3.0, False), (3, 10.0, False),
+                                              (3, 2.0, True), (2, 0.0, False), (2, 2.0, False),
+                                              (2, 2.0, True)])
+def test_fast_decision_agrees_with_the_lp(rng, dim, length, axial):
+    """decide_caged against is_caged (the LP) on random contacts, 1 to 24 per particle:
+    the same verdict every time, and the non-negative least squares decide all that the
+    pre-tests leave (none goes to the LP fallback on random contacts)."""
+    blocked = _dof_index(dim, length, default_dofs(dim, length, axial))
+    seen = {}
+    for _ in range(250):
+        m = int(rng.integers(1, 25))
+        rows = constraint_rows(*surface_contacts(rng, m, 0.5, length, dim))
+        caged, how = decide_caged(rows, blocked)
+        assert caged == is_caged(rows, blocked)
+        seen[how, caged] = seen.get((how, caged), 0) + 1
+    assert {("count", False), ("nnls", False), ("nnls", True)} <= set(seen)
+    assert not any(how == "lp" for how, _ in seen)
+
+
+@pytest.mark.parametrize("dim,length", [(3, 0.0), (3, 2.0), (2, 0.0), (2, 2.0)])
+def test_d_contacts_never_cage_d_freedoms(rng, dim, length):
+    """The counting bound of decide_caged, checked with the LP certificates (which do not
+    use it): d contacts leave an escape motion for d blocked freedoms however they lie,
+    even placed to balance (the d + 1-th of a cage removed)."""
+    blocked = _dof_index(dim, length, default_dofs(dim, length))
+    d = len(blocked)
+    for _ in range(60):
+        rows = constraint_rows(*surface_contacts(rng, d, 0.5, length, dim))
+        kind, proof = cage_certificate(rows, blocked)
+        assert kind == "free"
+        check_certificate(rows, blocked, kind, proof)
+        assert decide_caged(rows, blocked) == (False, "count")
+    # a cage with exactly d + 1 contacts exists (a sphere in a tetrahedron, a disk in a
+    # triangle), and loses it with any one removed
+    if length == 0:
+        nrm = (np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]]) / np.sqrt(3)
+               if dim == 3 else np.array([[np.cos(a), np.sin(a)] for a in (0, 2.1, 4.2)]))
+        rows = constraint_rows(0.5 * nrm, nrm)
+        assert decide_caged(rows, blocked) == (True, "nnls")
+        for k in range(d + 1):
+            assert decide_caged(np.delete(rows, k, axis=0), blocked) == (False, "count")
+
+
+def test_sign_pretest_finds_a_missing_direction():
+    """Six contacts all on the upper half of a sphere (normals with m_z >= 0) cannot stop
+    it moving down: the sign test says so, the LP agrees."""
+    nrm = np.array([[1, 0, 0.1], [-1, 0, 0.1], [0, 1, 0.1], [0, -1, 0.1], [0, 0, 1.0],
+                    [0.5, 0.5, 0.5]])
+    nrm /= np.linalg.norm(nrm, axis=1)[:, None]
+    rows = constraint_rows(0.5 * nrm, nrm)
+    assert decide_caged(rows, [0, 1, 2]) == (False, "sign")
+    assert not is_caged(rows, [0, 1, 2])

@@ -3,8 +3,9 @@ import numpy as np
 import pytest
 
 from analysis.base import NotComputedError
-from analysis.contacts import ContactNumber, geometric_contacts, remove_rattlers
-from analysis.frame import Frame
+from analysis.contacts import (ContactNumber, contact_number_distribution, geometric_contacts,
+                               remove_rattlers)
+from analysis.frame import Contacts, Frame
 
 
 def frame_of(x, radius, box, periodic=(True, True, True)):
@@ -69,3 +70,28 @@ def test_rattler_removal_is_iterative():
 def test_results_refuse_to_be_read_before_compute():
     with pytest.raises(NotComputedError):
         ContactNumber().z
+
+
+def test_contact_number_distribution_counts_touching_partners():
+    """P(C) of five spheres: a chain 1-2-3 plus the pair 4-5, 4 also on a wall. Walls,
+    rows without overlap and a pair listed twice (in either order) add nothing:
+    C = (1, 2, 1, 1, 1) -> P = (0, 4/5, 1/5), whose mean is 2 N_c / N."""
+    fr = frame_of(np.arange(15.0).reshape(5, 3), 0.5, [30.0] * 3)
+    i = np.array([1, 2, 4, 3, 1, 4])
+    j = np.array([2, 3, 5, 2, 5, -1])
+    overlap = np.array([1e-3, 1e-3, 1e-3, 1e-3, 0.0, 1e-3])
+    z = np.zeros((6, 3))
+    c = Contacts(0, i, j, z, z, overlap, z)
+    p = contact_number_distribution(fr, c)
+    np.testing.assert_allclose(p, [0.0, 0.8, 0.2])
+    assert p @ np.arange(3) == pytest.approx(2 * 3 / 5)
+    # no contacts: everyone has C = 0
+    np.testing.assert_allclose(contact_number_distribution(fr, c.subset(overlap < 0)), [1.0])
+
+
+def test_contact_number_distribution_of_the_cubic_lattice():
+    """A simple cubic lattice squeezed by 0.1 %: every sphere has six contacts."""
+    x = (simple_cubic(4) + 0.25) * 0.999
+    fr = frame_of(x, 0.5, [4.0 * 0.999] * 3)
+    np.testing.assert_allclose(contact_number_distribution(fr, geometric_contacts(fr)),
+                               np.eye(7)[6])

@@ -166,3 +166,88 @@ def test_analyse_run_passes_the_rattler_rule_and_warns_on_stderr(tmp_path, monke
                    "grains"]
     assert analyse_run.main([str(a) for a in args]) == 0
     assert seen["c_min"] is None
+
+
+def growth_dir(tmp_path, phi_growth, phi_cycles, jammed):
+    """thermo.dat and cycles.dat of a growth run: growth frames at ``phi_growth``, then
+    relaxed packings at ``phi_cycles`` (``jammed`` flags); steps 0, 1, ..."""
+    from pysim import io
+
+    with open(tmp_path / "thermo.dat", "w") as fh:
+        fh.write(io.thermo_header())
+        for k, f in enumerate(np.r_[phi_growth, phi_cycles]):
+            io.write_thermo_row(fh, (k, k, f, 0.0, 0.0, 0.0, 0))
+    start = len(phi_growth)
+    (tmp_path / "cycles.dat").write_text("# step phi pe_per_particle pressure n_contacts jammed "
+                                         "iterations residual settled\n" + "".join(
+        f"{start + k} {f} 0 0 0 {int(j)} 10 0 1\n"
+        for k, (f, j) in enumerate(zip(phi_cycles, jammed))))
+    return tmp_path
+
+
+def test_analyse_growth_reads_the_jump_and_the_cages_of_the_jammed_packing(tmp_path,
+                                                                            monkeypatch):
+    """Rods: growth frames on a base 2 + 30 (phi - 0.30) up to 0.40 (5 by then), the
+    unjammed relaxed packing at 0.42 (no contacts left) and the jammed one at 0.43 with
+    <C> 9.5: the value before the jump is the base where the growth ends, the relaxed
+    unjammed frame no point of the curve; noncaged_fraction_j is that of the frame at
+    phi_j. Spheres get NaN for the jump and no warning about it."""
+    from analysis import summary
+
+    phi_g = np.arange(0.30, 0.4001, 0.005)
+    run = growth_dir(tmp_path, phi_g, [0.42, 0.44, 0.43], [False, True, True])
+    z = np.r_[2.0 + 30.0 * (phi_g - 0.30), 0.0, 9.8, 9.5]
+    curves = pd.DataFrame({"step": np.arange(len(z)), "phi": np.r_[phi_g, 0.42, 0.44, 0.43],
+                           "z": z, "z_rattler_free": z, "z_bonds": z, "n_rattlers": 0, "n": 100,
+                           "s_nematic": 0.05, "noncaged_fraction": np.r_[np.ones(21), 1.0, 0.0,
+                                                                          0.02]})
+    seen = {}
+
+    def fake(run_dir, c_min, friction, caging=False):
+        seen["caging"] = caging
+        out = curves.copy()
+        out.attrs["rods"] = rods
+        return out
+
+    monkeypatch.setattr(summary, "frame_curves", fake)
+    rods = True
+    rows, cv, _thermo = summary.analyse_growth(run)
+    got = {name: v for name, v, _e in rows}
+    assert seen["caging"] and got["phi_j"] == 0.43
+    assert got["noncaged_fraction_j"] == 0.02
+    assert got["phi_before_jump"] == pytest.approx(0.40)
+    assert got["c_mean_before_jump"] == pytest.approx(5.0, abs=1e-9)
+    rods = False
+    rows, cv, _thermo = summary.analyse_growth(run)
+    got = {name: v for name, v, _e in rows}
+    assert np.isnan(got["c_mean_before_jump"]) and np.isnan(got["phi_before_jump"])
+    assert summary.problems(rows, cv) == []
+
+
+def test_pc_table_of_chosen_frames():
+    """P(C) rows of the frames nearest to the packing fractions asked for, each once."""
+    from analysis.contacts import contact_number_distribution
+    from analysis.frame import Contacts, Frame
+    from analysis.packing import packing_fraction
+    from analysis.summary import pc_table
+
+    frames = []
+    for step, box in ((0, 10.0), (5, 6.0), (9, 4.0)):
+        fr = Frame.from_arrays(np.arange(12.0).reshape(4, 3) % box, 0.5, [box] * 3, step=step)
+        z = np.zeros((3, 3))
+        frames.append((fr, Contacts(step, np.array([1, 2, 3]), np.array([2, 3, 4]), z, z,
+                                    np.array([1e-3, 1e-3, -1.0 if step == 0 else 1e-3]), z)))
+
+    class Run:
+        def frames(self):
+            return frames
+
+    every = pc_table(Run())
+    assert every.columns.tolist() == ["step", "phi", "c", "fraction"]
+    assert every.step.unique().tolist() == [0, 5, 9]
+    first = every[every.step == 0]
+    np.testing.assert_allclose(first.fraction, contact_number_distribution(*frames[0]))
+    assert first.phi.iloc[0] == packing_fraction(frames[0][0])
+    phis = [packing_fraction(f) for f, _c in frames]
+    chosen = pc_table(Run(), [phis[2] + 0.01, phis[0], phis[2]])
+    assert chosen.step.unique().tolist() == [9, 0]

@@ -45,9 +45,15 @@ def test_growth_to_jamming_of_spheres(tmp_path):
     assert at_j.residual < 1e-3
     from analysis.summary import analyse_growth
 
-    obs = {k: v for k, v, _ in analyse_growth(out)[0]}
+    rows, curves, _thermo = analyse_growth(out)
+    obs = {k: v for k, v, _ in rows}
     assert obs["phi_j"] == pytest.approx(meta["phi_j"])
     assert obs["residual_j"] == pytest.approx(at_j.residual) and obs["settled_j"] == 1
+    # Wouterse et al.'s per-frame caging: nothing touches at the start, so nothing is
+    # caged; at phi_J (z about 6, rattlers aside) most spheres are; spheres have no jump
+    assert curves.noncaged_fraction.iloc[0] == 1.0
+    assert 0.0 <= obs["noncaged_fraction_j"] < 0.3
+    assert np.isnan(obs["c_mean_before_jump"]) and np.isnan(obs["phi_before_jump"])
     # every relaxed packing is a frame of the dumps, with its contacts
     steps = {f.step for f, _ in RunData(out).frames()}
     assert set(cycles.step) <= steps
