@@ -126,6 +126,10 @@ def get_final_output():
         if any(c["particles"].get("dimension", 3) == 2 and c["particles"]["aspect_ratio"] > 0
                for c in cases) and study not in tapping | deposit:
             out.append(f"{RESULTS}/{study}/figures/contact_angles.png")  # 2-D rods: P(varphi)
+        if protocol[study] == "growth":  # the runs of each aspect ratio across the rates
+            for alpha in growth_groups(study):
+                out += [f"{RESULTS}/{study}/figures/growth_alpha{alpha}.png",
+                        f"{RESULTS}/{study}/growth_alpha{alpha}.csv"]
         if study in modes_studies():
             out.append(f"{RESULTS}/{study}/figures/modes.png")  # dynamical matrix
         if protocol[study] == "compress" and len({c["particles"]["n"] for c in cases}) > 1 and all(
@@ -142,3 +146,15 @@ def get_final_output():
         kinds = ["snapshots"] if study in tapping else ["pressure", "contacts", "phi_j", "packing"]
         out += expand(f"{RESULTS}/{study}/figures/{variant}.{{kind}}.png", kind=kinds)
     return out
+
+
+def growth_groups(study):
+    """``{alpha label: run dirs}`` of a growth study's pysim runs, one group per aspect
+    ratio (its runs differ in the growth rate: rule growth_rates)."""
+    groups = {}
+    for r in RUNS:
+        case = CFG["_cases"][(r.study, r.variant, r.seed)]
+        if r.study == study and r.engine == "pysim" and case["protocol"]["name"] == "growth":
+            groups.setdefault(f"{case['particles'].get('aspect_ratio', 0.0):g}", []).append(
+                f"{RESULTS}/{r.run_dir}")
+    return groups

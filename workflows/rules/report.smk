@@ -394,3 +394,28 @@ rule landing:
     shell:
         "{PYTHON} -m workflows.scripts.landing --results {RESULTS} --html {output.page}"
         " --figure {output.figure} 2> {log}"
+
+
+rule growth_rates:
+    input:
+        lambda wc: [
+            f"{d}/{name}"
+            for d in growth_groups(wc.study)[wc.alpha]
+            for name in ("observables.csv", "curves.csv", "run.json")
+        ],
+    output:
+        figure=report(
+            f"{RESULTS}/{{study}}/figures/growth_alpha{{alpha}}.png",
+            caption="../report/growth_rates.rst",
+            category="{study}",
+        ),
+        table=f"{RESULTS}/{{study}}/growth_alpha{{alpha}}.csv",
+    wildcard_constraints:
+        alpha=r"[0-9.]+",
+    log:
+        f"{RESULTS}/{{study}}/figures/growth_alpha{{alpha}}.log",
+    params:
+        dirs=lambda wc: " ".join(growth_groups(wc.study)[wc.alpha]),
+    shell:
+        "{PYTHON} -m workflows.scripts.growth_rates --figure {output.figure}"
+        " --table {output.table} {params.dirs} 2> {log}"
