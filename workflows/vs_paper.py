@@ -107,9 +107,22 @@ def mode_rows(study: str, path: Path) -> pd.DataFrame:
                          "uncertainty": float("nan")})
 
 
+def growth_rate_rows(study: str, root: Path) -> pd.DataFrame:
+    """The cross-rate packing fractions of a growth study (its ``growth_alpha*.csv``,
+    workflows/scripts/growth_rates.py) as ``summary.csv`` rows of the slowest run."""
+    parts = [pd.read_csv(p) for p in sorted((root / study).glob("growth_alpha*.csv"))]
+    if not parts:
+        return pd.DataFrame()
+    g = pd.concat(parts, ignore_index=True)
+    return pd.DataFrame({"study": study, "case": g["case"], "engine": "pysim",
+                         "seed": g["seed"].astype(int), "observable": g["observable"],
+                         "value": g["value"], "uncertainty": float("nan")})
+
+
 def run_table(results_dirs) -> tuple[pd.DataFrame, pd.DataFrame]:
     """``(runs, results)`` of every ``summary.csv`` under ``results_dirs`` (with the band
-    fractions of any ``<study>/modes.csv`` beside it): one run row per
+    fractions of any ``<study>/modes.csv`` and the cross-rate rows of any
+    ``<study>/growth_alpha*.csv`` beside it): one run row per
     ``study, case, engine, seed`` with :func:`case_terms` of its ``case.yaml``
     (``<results>/<study>/<case>/seed<k>/case.yaml``). A folder without a summary is
     skipped."""
@@ -123,6 +136,7 @@ def run_table(results_dirs) -> tuple[pd.DataFrame, pd.DataFrame]:
                          "uncertainty"]])
         parts += [mode_rows(study, root / study / "modes.csv")
                   for study in df["study"].unique() if (root / study / "modes.csv").is_file()]
+        parts += [growth_rate_rows(study, root) for study in df["study"].unique()]
         terms_of: dict[tuple, dict] = {}
         for (study, case, engine, seed), _ in df.groupby(["study", "case", "engine", "seed"]):
             key = (study, case, seed)

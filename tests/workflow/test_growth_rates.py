@@ -26,8 +26,10 @@ def two_rates(tmp_path_factory):
     """120 spheres contracted to 0.45 and grown at two rates (0.2 and 2 per unit time at
     dt 1e-4: 2e-5 and 2e-4 per step) to jamming, a frame every 40 steps."""
     dirs = []
+    root = tmp_path_factory.mktemp("results")
     for rate in (0.2, 2.0):
-        tmp = tmp_path_factory.mktemp(f"rate{rate}")
+        tmp = root / "w" / f"rate{rate}" / "seed1"  # the pipeline's layout
+        tmp.mkdir(parents=True)
         case = growth_case(120, 8, phi_init=0.3, rate=rate, phi_grow=0.6, increment=0.01,
                            tolerance=2e-3, contraction={"phi": 0.45, "increment": 0.05})
         case["output"] = {"thermo_every": 40, "dump_every": 40}
@@ -47,6 +49,7 @@ def test_growth_rates_figure_and_table(two_rates, tmp_path):
     t = pd.read_csv(table).set_index("observable")
     assert set(t.index) == {"phi_c_rate_independent", "phi_noncaged_rate_independent"}
     assert (t.runs == 2).all() and (t.rates == "2e-04;2e-05").all() and (t.alpha == 0).all()
+    assert (t.case == "rate0.2").all() and (t.seed == 1).all()  # filed under the slowest
     # both rates grow from the same contracted start: where they agree lies inside the
     # range both cover, from 0.45 up to about phi_J
     assert t.value.between(0.45, 0.67).all()

@@ -2,6 +2,7 @@
 repository's reference tables."""
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import yaml
 
@@ -133,6 +134,28 @@ def test_band_fractions_of_modes_csv_join_the_runs(tmp_path):
     assert set(low.engine) == {"pysim"} and set(low.case) == {"alpha4"}
     assert "bonds" not in set(results.observable)
     assert len(runs) == 2
+
+
+def test_cross_rate_rows_of_growth_csv_join_the_slowest_run(tmp_path):
+    root = tmp_path / "results"
+    d = root / "w" / "alpha0_slow" / "seed1"
+    d.mkdir(parents=True)
+    (d / "case.yaml").write_text(yaml.safe_dump({**CASE_2D, "particles": {
+        **CASE_2D["particles"], "dimension": 3}}))
+    pd.DataFrame([{"study": "w", "case": "alpha0_slow", "engine": "pysim", "seed": 1,
+                   "observable": "phi_j", "value": 0.64, "uncertainty": float("nan")}]
+                 ).to_csv(root / "summary.csv", index=False)
+    pd.DataFrame({"case": ["alpha0_slow"] * 2, "seed": [1, 1],
+                  "observable": ["phi_c_rate_independent", "phi_noncaged_rate_independent"],
+                  "value": [0.601, float("nan")], "alpha": [0.0, 0.0], "runs": [3, 3],
+                  "rates": ["1e-06;1e-07;1e-08"] * 2}).to_csv(root / "w" / "growth_alpha0.csv",
+                                                            index=False)
+    runs, results = run_table([root])
+    got = results.set_index("observable")
+    assert got.loc["phi_c_rate_independent", "value"] == 0.601
+    assert got.loc["phi_c_rate_independent", "case"] == "alpha0_slow"
+    assert np.isnan(got.loc["phi_noncaged_rate_independent", "value"])
+    assert len(runs) == 1
 
 
 def test_a_bad_reference_table_is_one_line(tmp_path, capsys):

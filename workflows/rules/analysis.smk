@@ -74,6 +74,10 @@ rule vs_paper:
     input:
         summary=f"{RESULTS}/summary.csv",
         modes=lambda wc: [f"{RESULTS}/{s}/modes.csv" for s in modes_studies()],
+        growth=lambda wc: [f"{RESULTS}/{s}/growth_alpha{a}.csv"
+                           for s in sorted({s for s, _ in study_variants()})
+                           if CFG["studies"][s]["case"]["protocol"]["name"] == "growth"
+                           for a in growth_groups(s)],
         references=sorted(glob.glob(os.path.join(REFERENCES, "*.csv"))),
     output:
         table=report(

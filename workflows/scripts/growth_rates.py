@@ -7,7 +7,8 @@ agree (:func:`analysis.growth.phi_rate_independent`).
 
 Each ``RUN_DIR`` is ``<results>/<study>/<case>/seed<k>/<engine>`` of a finished growth
 run (``curves.csv``, ``observables.csv`` and the dumps); the case is read from the
-``case.yaml`` beside it. The table has one row per observable: ``observable``, ``value``
+``case.yaml`` beside it. The table has one row per observable, filed under the slowest
+run (``case``, ``seed``: what ``vs_paper`` matches to the paper): ``observable``, ``value``
 (NaN with fewer than two rates, or where the curves never agree), ``runs``, ``rates``
 (the paper's unit: relative growth per time step). Failed runs are left out."""
 from __future__ import annotations
@@ -83,7 +84,9 @@ def main(argv=None) -> int:
         value = np.nan
         if len(runs) > 1:
             value = phi_rate_independent([r["curves"] for r in runs], column)
-        rows.append({"observable": name, "value": value, "alpha": slowest["alpha"],
+        rows.append({"case": slowest["dir"].parent.parent.name,
+                     "seed": int(slowest["dir"].parent.name.removeprefix("seed")),
+                     "observable": name, "value": value, "alpha": slowest["alpha"],
                      "runs": len(runs), "rates": ";".join(f"{r['rate']:.0e}" for r in runs)})
     atomic_write_text(a.table, pd.DataFrame(rows).to_csv(index=False))
     return 0
