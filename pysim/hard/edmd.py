@@ -336,6 +336,30 @@ class EDMD:
         self.collisions = 0
         self.time = 0.0
 
+    #: what :meth:`arrays` saves: between blocks (every ``tloc`` 0, every event predicted
+    #: afresh at the next block) these make the whole state, the cell lists included,
+    #: whose order decides ties and whose transfers decide where a flight is cut
+    ARRAYS = ("x", "v", "dn", "cell", "head", "nxt", "prv", "count")
+    SCALARS = ("side", "r", "rate", "phi_cap", "collisions", "time")
+
+    def arrays(self) -> dict:
+        """The state between blocks, to save (:meth:`from_arrays` restores it)."""
+        out = {k: getattr(self, k).copy() for k in self.ARRAYS}
+        out.update({k: np.asarray(getattr(self, k)) for k in self.SCALARS})
+        return out
+
+    @classmethod
+    def from_arrays(cls, a) -> "EDMD":
+        """The state :meth:`arrays` saved, exactly: a run continued from it is the same
+        run."""
+        s = cls(a["x"], a["v"], a["dn"], float(a["side"]), float(a["r"]), float(a["rate"]),
+                phi_cap=float(a["phi_cap"]))
+        for k in cls.ARRAYS:
+            getattr(s, k)[...] = a[k]
+        s.collisions = int(a["collisions"])
+        s.time = float(a["time"])
+        return s
+
     # -- measures ------------------------------------------------------------------------
     @property
     def volume(self) -> float:
