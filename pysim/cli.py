@@ -104,7 +104,7 @@ def _run(case, init, args) -> int:
     from pysim.jit import get_threads
     from pysim.hard.cells import GridError
     from pysim.hard.edmd import DynamicsError
-    from pysim.protocols import compress, deposit, growth, jammed, ls, mls, tapping
+    from pysim.protocols import compress, deposit, fb, growth, jammed, ls, mls, tapping
     from pysim.protocols.hard import StartError
     from pysim.protocols.output import ResumeError
     from pysim.simulation import BlowUpError
@@ -112,8 +112,8 @@ def _run(case, init, args) -> int:
 
     args.out.mkdir(parents=True, exist_ok=True)
     driver = {"compress": compress, "growth": growth, "jammed": jammed,
-              "tapping": tapping, "deposit": deposit, "ls": ls,
-              "mls": mls}[case["protocol"]["name"]]
+              "tapping": tapping, "deposit": deposit, "ls": ls, "mls": mls,
+              "fb": fb}[case["protocol"]["name"]]
     try:
         summary = driver.run(case, init, args.out, progress=not args.no_progress,
                              resume=args.resume, checkpoint_every=args.checkpoint_every)

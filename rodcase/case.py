@@ -281,7 +281,7 @@ def particle_measure(d: float, alpha: float, dimension: int) -> float:
 
 
 #: the hard-sphere protocols (pysim.hard): no contact law, spheres in a periodic cube
-HARD_SPHERE_PROTOCOLS = ("ls", "mls")
+HARD_SPHERE_PROTOCOLS = ("ls", "mls", "fb")
 #: the highest packing fraction pysim's hard-sphere cell grid is made for, and its fewest
 #: cells per side (pysim.hard.edmd.PHI_CAP, pysim.hard.cells.MIN_CELLS)
 HARD_PHI_CAP = 0.78

@@ -85,22 +85,26 @@ class HardFiles(RunFiles):
 
     def row(self, s: EDMD, blk, rate: float, stage: str, step: int):
         """The block's rows of ``thermo.dat`` and ``blocks.dat``."""
-        nc = len(s.near_contacts(self.contact_gap)[2])
-        phi = s.packing_fraction()
-        self.thermo((step, s.time, phi, blk.pressure, blk.kinetic_mean, 0.0, nc))
-        temp = 2.0 * blk.kinetic_mean / (3.0 * s.n)
-        self.write("blocks.dat", f"{step} {s.time:.10g} {phi:.12g} {rate:.10g} "
-                                 f"{blk.reduced_pressure:.10g} {temp:.10g} {stage}\n")
+        self.rows(step, s.time, s.packing_fraction(), blk.pressure, blk.kinetic_mean, 0.0,
+                  len(s.near_contacts(self.contact_gap)[2]), rate, blk.reduced_pressure,
+                  2.0 * blk.kinetic_mean / (3.0 * s.n), stage)
 
-    def save(self, s: EDMD, driver: dict):
-        """Flush the files and checkpoint the system with the files' sizes."""
+    def rows(self, step, t, phi, pressure, ke, pe, nc, rate, z, temperature, stage):
+        """A row of ``thermo.dat`` and one of ``blocks.dat``."""
+        self.thermo((step, t, phi, pressure, ke, pe, nc))
+        self.write("blocks.dat", f"{step} {t:.10g} {phi:.12g} {rate:.10g} {z:.10g} "
+                                 f"{temperature:.10g} {stage}\n")
+
+    def save(self, arrays: dict, driver: dict):
+        """Flush the files and checkpoint the state's ``arrays`` with the files' sizes and
+        the driver's progress."""
         sizes = {}
         for k, f in self.fh.items():
             f.flush()
             os.fsync(f.fileno())
             sizes[k] = f.tell()
         meta = {"files": sizes, "driver": driver}
-        arrays = {f"sys_{k}": a for k, a in s.arrays().items()}
+        arrays = {f"sys_{k}": a for k, a in arrays.items()}
         arrays["meta"] = np.frombuffer(json.dumps(meta).encode(), dtype=np.uint8)
         tmp = self.ckpt.with_name(self.ckpt.name + ".part")
         with open(tmp, "wb") as fh:
@@ -109,49 +113,60 @@ class HardFiles(RunFiles):
             os.fsync(fh.fileno())
         os.replace(tmp, self.ckpt)
 
-    def load(self) -> tuple[EDMD, dict]:
-        """The checkpointed system and driver progress; the files cut back to it."""
+    def load(self) -> tuple[dict, dict]:
+        """The checkpointed arrays and driver progress; the files cut back to them."""
         if not self.ckpt.exists():
             raise ResumeError(f"{self.ckpt}: no checkpoint to resume from; run without --resume")
         with np.load(self.ckpt) as z:
             meta = json.loads(bytes(z["meta"]).decode())
-            s = EDMD.from_arrays({k[4:]: z[k] for k in z.files if k.startswith("sys_")})
+            arrays = {k[4:]: z[k] for k in z.files if k.startswith("sys_")}
         self.cut(meta["files"])
-        return s, meta["driver"]
+        return arrays, meta["driver"]
 
 
 def run_stages(s: EDMD, stages: list, names: list[str], files: HardFiles, drv: dict,
-               dump_every: int, progress: bool, checkpoint_every: float) -> dict:
-    """Run the stages from ``drv["stage"]`` on (their state in ``drv["states"]``), a
-    block at a time, recording every block; returns ``drv`` with ``phi`` of each
-    finished stage (``drv["phi"][name]``)."""
+               dump_every: int, progress: bool, checkpoint_every: float,
+               first: int = 0) -> dict:
+    """Run the stages from ``drv["stage"]`` on (their state in ``drv["states"]``; the
+    first is stage ``first`` of the run), a block at a time, recording every block at
+    step ``drv["step0"]`` (0 unless set) plus the collisions so far; returns ``drv``
+    with ``phi`` of each finished stage (``drv["phi"][name]``)."""
+    step0 = drv.get("step0", 0)
     last_ckpt = time.perf_counter()
     bar = tqdm(disable=not progress, unit="block", mininterval=1.0, dynamic_ncols=True,
                initial=drv["blocks"], desc="pysim " + "+".join(names))
     try:
-        while drv["stage"] < len(stages):
+        while drv["stage"] - first < len(stages):
             k = drv["stage"]
-            stage, name = stages[k], names[k]
+            stage, name = stages[k - first], names[k - first]
+            t_stage = time.perf_counter()
             while not stage.done:
                 rate = stage.rate
                 blk = stage.step(s)
                 drv["blocks"] += 1
-                files.row(s, blk, rate, name, s.collisions)
+                files.row(s, blk, rate, name, step0 + s.collisions)
                 if drv["blocks"] % dump_every == 0:
-                    files.dump(s, s.collisions)
+                    files.dump(s, step0 + s.collisions)
                 drv["states"][k] = stage.to_dict()
                 bar.update(1)
                 bar.set_postfix(phi=f"{s.packing_fraction():.6f}",
                                 Z=f"{blk.reduced_pressure:.3g}", rate=f"{rate:.3g}",
                                 refresh=False)
                 if not stage.done and time.perf_counter() - last_ckpt > checkpoint_every:
-                    files.save(s, drv)
+                    drv.setdefault("seconds", {})
+                    drv["seconds"][name] = (drv["seconds"].get(name, 0.0)
+                                            + time.perf_counter() - t_stage)
+                    t_stage = time.perf_counter()
+                    files.save(s.arrays(), drv)
                     last_ckpt = time.perf_counter()
             drv["phi"][name] = s.packing_fraction()
+            # wall time per stage, over every run of a resumed one
+            drv.setdefault("seconds", {})
+            drv["seconds"][name] = drv["seconds"].get(name, 0.0) + time.perf_counter() - t_stage
             drv["stage"] = k + 1
             if drv["blocks"] % dump_every != 0:
-                files.dump(s, s.collisions)
-            files.save(s, drv)
+                files.dump(s, step0 + s.collisions)
+            files.save(s.arrays(), drv)
             last_ckpt = time.perf_counter()
     finally:
         bar.close()
@@ -176,7 +191,8 @@ def drive(case: dict, init: dict, out_dir, make_stages, progress: bool, resume: 
     files = HardFiles(out_dir, init["ids"], p["contact_gap"])
     t0 = time.perf_counter()
     if resume:
-        s, drv = files.load()
+        arrays, drv = files.load()
+        s = EDMD.from_arrays(arrays)
     else:
         s = start_system(case, init)
         files.start()
@@ -199,4 +215,5 @@ def summary(s: EDMD, drv: dict, wall: float, resumed: bool) -> dict:
     """What every hard-sphere run puts in ``run.json``."""
     return {"phi_start": drv["phi_start"], "blocks": drv["blocks"], "collisions": s.collisions,
             "collisions_per_particle": s.collisions / s.n, "time": s.time,
-            "wall_seconds": wall, "resumed": bool(resumed), "cells_per_side": s.nc}
+            "wall_seconds": wall, "resumed": bool(resumed), "cells_per_side": s.nc,
+            "stage_seconds": drv.get("seconds", {})}
