@@ -21,8 +21,8 @@ from pysim.hard.edmd import EDMD, thermal_velocities
 from pysim.hard.fb import FB
 from pysim.hard.mls import MLS
 from pysim.hard.start import velocity_rng
-from pysim.protocols.hard import (HardFiles, StartError, mls_params, run_stages, start_system,
-                                  summary)
+from pysim.protocols.hard import (HardFiles, StartError, clock, mls_params, run_stages,
+                                  start_system, summary)
 
 
 def _system(a: dict) -> EDMD:
@@ -69,7 +69,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
             a = {k: arrays[k] for k in ("x", "dn", "f")}
             a["side"] = float(arrays["side"])
             last_ckpt = time.perf_counter()
-            t_stage = time.perf_counter()
+            t_stage, c_stage = time.perf_counter(), time.process_time()
             bar = tqdm(disable=not progress, unit="step", mininterval=1.0, dynamic_ncols=True,
                        initial=drv["blocks"], desc="pysim fb")
             with bar:
@@ -82,12 +82,14 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
                     bar.set_postfix(phi=f"{fb.phi():.6f}", rho_out=f"{fb.rho_out:.6f}",
                                     refresh=False)
                     if not fb.done and time.perf_counter() - last_ckpt > checkpoint_every:
+                        clock(drv, "fb", t_stage, c_stage)
+                        t_stage, c_stage = time.perf_counter(), time.process_time()
                         files.save({k: v for k, v in a.items() if not k.startswith("_")}, drv)
                         last_ckpt = time.perf_counter()
             s = _system(a)
             s.v = thermal_velocities(s.n, p["temperature"], velocity_rng(case["seed"]))
             drv["phi"]["fb"] = s.packing_fraction()
-            drv["seconds"] = {"fb": time.perf_counter() - t_stage}
+            clock(drv, "fb", t_stage, c_stage)
             drv["stage"] = 1
             drv["step0"] = fb.done_iterations
             files.save(s.arrays(), drv)

@@ -124,6 +124,15 @@ class HardFiles(RunFiles):
         return arrays, meta["driver"]
 
 
+def clock(drv: dict, name: str, wall0: float, cpu0: float):
+    """Add the wall and CPU time since ``wall0``, ``cpu0`` to stage ``name``'s (over
+    every run of a resumed one)."""
+    for key, now, then in (("seconds", time.perf_counter(), wall0),
+                           ("cpu_seconds", time.process_time(), cpu0)):
+        drv.setdefault(key, {})
+        drv[key][name] = drv[key].get(name, 0.0) + now - then
+
+
 def run_stages(s: EDMD, stages: list, names: list[str], files: HardFiles, drv: dict,
                dump_every: int, progress: bool, checkpoint_every: float,
                first: int = 0) -> dict:
@@ -139,7 +148,7 @@ def run_stages(s: EDMD, stages: list, names: list[str], files: HardFiles, drv: d
         while drv["stage"] - first < len(stages):
             k = drv["stage"]
             stage, name = stages[k - first], names[k - first]
-            t_stage = time.perf_counter()
+            t_stage, c_stage = time.perf_counter(), time.process_time()
             while not stage.done:
                 rate = stage.rate
                 blk = stage.step(s)
@@ -153,16 +162,12 @@ def run_stages(s: EDMD, stages: list, names: list[str], files: HardFiles, drv: d
                                 Z=f"{blk.reduced_pressure:.3g}", rate=f"{rate:.3g}",
                                 refresh=False)
                 if not stage.done and time.perf_counter() - last_ckpt > checkpoint_every:
-                    drv.setdefault("seconds", {})
-                    drv["seconds"][name] = (drv["seconds"].get(name, 0.0)
-                                            + time.perf_counter() - t_stage)
-                    t_stage = time.perf_counter()
+                    clock(drv, name, t_stage, c_stage)
+                    t_stage, c_stage = time.perf_counter(), time.process_time()
                     files.save(s.arrays(), drv)
                     last_ckpt = time.perf_counter()
             drv["phi"][name] = s.packing_fraction()
-            # wall time per stage, over every run of a resumed one
-            drv.setdefault("seconds", {})
-            drv["seconds"][name] = drv["seconds"].get(name, 0.0) + time.perf_counter() - t_stage
+            clock(drv, name, t_stage, c_stage)
             drv["stage"] = k + 1
             if drv["blocks"] % dump_every != 0:
                 files.dump(s, step0 + s.collisions)
@@ -216,4 +221,5 @@ def summary(s: EDMD, drv: dict, wall: float, resumed: bool) -> dict:
     return {"phi_start": drv["phi_start"], "blocks": drv["blocks"], "collisions": s.collisions,
             "collisions_per_particle": s.collisions / s.n, "time": s.time,
             "wall_seconds": wall, "resumed": bool(resumed), "cells_per_side": s.nc,
-            "stage_seconds": drv.get("seconds", {})}
+            "stage_seconds": drv.get("seconds", {}),
+            "stage_cpu_seconds": drv.get("cpu_seconds", {})}
