@@ -282,10 +282,12 @@ def particle_measure(d: float, alpha: float, dimension: int) -> float:
 
 #: the hard-sphere protocols (pysim.hard): no contact law, spheres in a periodic cube
 HARD_SPHERE_PROTOCOLS = ("ls", "mls", "fb")
-#: the highest packing fraction pysim's hard-sphere cell grid is made for, and its fewest
-#: cells per side (pysim.hard.edmd.PHI_CAP, pysim.hard.cells.MIN_CELLS)
+#: pysim's hard-sphere cell grid: the packing fraction a case must be able to reach, the
+#: fewest cells per side, and the neighbour lists' skin in mean diameters
+#: (pysim.hard.cells.MIN_CELLS, pysim.hard.edmd.SKIN)
 HARD_PHI_CAP = 0.78
-HARD_MIN_CELLS = 4
+HARD_MIN_CELLS = 3
+HARD_SKIN = 0.2
 
 
 def _check_hard(case: dict, source: str, at: str):
@@ -314,16 +316,17 @@ def _check_hard(case: dict, source: str, at: str):
     if d.get("distribution", "mono") != "lognormal" and d.get("sigma", 0):
         raise ConfigError(f"{source}: {at}particles.diameter.sigma = {d['sigma']} needs "
                           "distribution: lognormal (mono diameters have sigma 0)")
-    # the cell grid: cells no smaller than the largest diameter at HARD_PHI_CAP
+    # the cell grid: cells no smaller than the largest diameter at HARD_PHI_CAP plus the
+    # neighbour lists' skin
     phi_nom = pr["phi_nominal"]
     sig = d.get("sigma", 0.0)
     side = (p["n"] * math.pi / 6 * (1 + sig**2) ** 3 / phi_nom) ** (1 / 3)
-    reach = size_extremes(d)[2] * (HARD_PHI_CAP / phi_nom) ** (1 / 3)
+    reach = size_extremes(d)[2] * (HARD_PHI_CAP / phi_nom) ** (1 / 3) + HARD_SKIN
     if side < HARD_MIN_CELLS * reach:
         n_min = math.ceil(p["n"] * (HARD_MIN_CELLS * reach / side) ** 3)
         raise ConfigError(f"{source}: {at}particles.n = {p['n']} is too small for protocol "
                           f"{name}: the box must hold {HARD_MIN_CELLS} cells of the largest "
-                          f"diameter per side; use n >= {n_min}")
+                          f"diameter and skin per side; use n >= {n_min}")
 
 
 def _check_case(case: dict, source: str, at: str):

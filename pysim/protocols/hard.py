@@ -220,6 +220,6 @@ def summary(s: EDMD, drv: dict, wall: float, resumed: bool) -> dict:
     """What every hard-sphere run puts in ``run.json``."""
     return {"phi_start": drv["phi_start"], "blocks": drv["blocks"], "collisions": s.collisions,
             "collisions_per_particle": s.collisions / s.n, "time": s.time,
-            "wall_seconds": wall, "resumed": bool(resumed), "cells_per_side": s.nc,
+            "wall_seconds": wall, "resumed": bool(resumed),
             "stage_seconds": drv.get("seconds", {}),
             "stage_cpu_seconds": drv.get("cpu_seconds", {})}
