@@ -102,23 +102,27 @@ def _initial(case: dict, data: Path | None) -> dict:
 def _run(case, init, args) -> int:
     import pysim
     from pysim.jit import get_threads
-    from pysim.protocols import compress, deposit, growth, jammed, tapping
+    from pysim.hard.cells import GridError
+    from pysim.hard.edmd import DynamicsError
+    from pysim.protocols import compress, deposit, fb, growth, jammed, ls, mls, tapping
     from pysim.protocols.contraction import ContractionJammedError
+    from pysim.protocols.hard import StartError
     from pysim.protocols.output import ResumeError
     from pysim.simulation import BlowUpError
     from rodcase import record
 
     args.out.mkdir(parents=True, exist_ok=True)
     driver = {"compress": compress, "growth": growth, "jammed": jammed,
-              "tapping": tapping, "deposit": deposit}[case["protocol"]["name"]]
+              "tapping": tapping, "deposit": deposit, "ls": ls, "mls": mls,
+              "fb": fb}[case["protocol"]["name"]]
     try:
         summary = driver.run(case, init, args.out, progress=not args.no_progress,
                              resume=args.resume, checkpoint_every=args.checkpoint_every)
-    except ResumeError as exc:
+    except (ResumeError, StartError, GridError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except (BlowUpError, growth.GrowthLimitError, ContractionJammedError, tapping.SettleError,
-            deposit.FeedBlockedError, deposit.NotSettledError) as exc:
+            deposit.FeedBlockedError, deposit.NotSettledError, DynamicsError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 3
     except (KeyboardInterrupt, SystemError) as exc:

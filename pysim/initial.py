@@ -11,6 +11,7 @@ import numpy as np
 
 from pysim.geometry import closest_params
 from pysim.jit import njit
+from rodcase.case import HARD_SPHERE_PROTOCOLS
 
 #: highest packing fraction accepted for random sequential addition of spheres
 PHI_RSA_MAX = 0.35
@@ -426,6 +427,9 @@ def write_initial(case: dict, path) -> None:
     dd = p["diameter"]
     d = sample_diameters(p["n"], dd.get("distribution", "mono"), dd["mean"], dd.get("sigma", 0.0),
                          rng, dd.get("ratio", 1.4), dd.get("fraction_big", 0.5))
+    if case["protocol"]["name"] in HARD_SPHERE_PROTOCOLS:
+        _write_poisson(case, d, rng, path)
+        return
     phi = case["protocol"]["phi_init"]
     dim = p.get("dimension", 3)
     alpha = p.get("aspect_ratio", 0.0)
@@ -475,6 +479,21 @@ def write_initial(case: dict, path) -> None:
     x, u, r, length, box = random_spherocylinders(d / 2.0, alpha * d, phi, seed, dimension=dim)
     x, u, r, length = _by_cell(np.zeros(3), box, x, u, r, length)
     write_rod_data(path, x, u, r, length, box, p.get("density", 1.0), dimension=dim, title=title)
+
+
+def _write_poisson(case: dict, d, rng, path) -> None:
+    """The start of a hard-sphere case (:mod:`pysim.hard.start`): the diameters rescaled
+    to mean 1 (the paper's normalisation), at Poisson points (overlapping) in the cube
+    where they fill ``protocol.phi_nominal``."""
+    from pysim.hard.start import box_side, poisson
+    from pysim.io import write_sphere_data
+
+    d = d / np.mean(d)
+    phi = case["protocol"]["phi_nominal"]
+    side = box_side(d, phi)
+    x = poisson(len(d), side, rng)
+    write_sphere_data(path, x, d, np.full(3, side), case["particles"].get("density", 1.0),
+                      title=f"rodpack Poisson start, seed {case['seed']}, nominal phi {phi}")
 
 
 def feed_queue(radius, length, width: float, height: float):

@@ -280,7 +280,59 @@ def particle_measure(d: float, alpha: float, dimension: int) -> float:
     return math.pi * d * d * length / 4 + math.pi * d**3 / 6
 
 
+#: the hard-sphere protocols (pysim.hard): no contact law, spheres in a periodic cube
+HARD_SPHERE_PROTOCOLS = ("ls", "mls", "fb")
+#: pysim's hard-sphere cell grid: the packing fraction a case must be able to reach, the
+#: fewest cells per side, and the neighbour lists' skin in mean diameters
+#: (pysim.hard.cells.MIN_CELLS, pysim.hard.edmd.SKIN)
+HARD_PHI_CAP = 0.78
+HARD_MIN_CELLS = 3
+HARD_SKIN = 0.2
+
+
+def _check_hard(case: dict, source: str, at: str):
+    """A hard-sphere case: spheres of mean nominal diameter 1 in a periodic cube, no
+    contact law, no walls, no gravity, enough of them for the cell grid."""
+    p = case["particles"]
+    pr = case["protocol"]
+    name = pr["name"]
+    for key, bad in (("contact", "contact" in case), ("container", "container" in case),
+                     ("gravity", case.get("gravity", 0.0) != 0.0)):
+        if bad:
+            raise ConfigError(f"{source}: {at}{key} does not apply to the hard-sphere protocol "
+                              f"{name} (no contact law, walls or gravity); remove it")
+    if p["dimension"] != 3 or p["aspect_ratio"] != 0:
+        raise ConfigError(f"{source}: {at}particles: protocol {name} is for 3-D spheres; got "
+                          f"dimension {p['dimension']}, aspect_ratio {p['aspect_ratio']}")
+    d = p["diameter"]
+    if d["mean"] != 1.0:
+        raise ConfigError(f"{source}: {at}particles.diameter.mean = {d['mean']} is not allowed "
+                          f"for protocol {name}; use 1 (lengths in mean nominal diameters, "
+                          "the unit of the compression rate and temperature)")
+    if d.get("distribution", "mono") not in ("mono", "lognormal"):
+        raise ConfigError(f"{source}: {at}particles.diameter.distribution = "
+                          f"{d['distribution']!r} is not allowed for protocol {name}; use mono "
+                          "or lognormal")
+    if d.get("distribution", "mono") != "lognormal" and d.get("sigma", 0):
+        raise ConfigError(f"{source}: {at}particles.diameter.sigma = {d['sigma']} needs "
+                          "distribution: lognormal (mono diameters have sigma 0)")
+    # the cell grid: cells no smaller than the largest diameter at HARD_PHI_CAP plus the
+    # neighbour lists' skin
+    phi_nom = pr["phi_nominal"]
+    sig = d.get("sigma", 0.0)
+    side = (p["n"] * math.pi / 6 * (1 + sig**2) ** 3 / phi_nom) ** (1 / 3)
+    reach = size_extremes(d)[2] * (HARD_PHI_CAP / phi_nom) ** (1 / 3) + HARD_SKIN
+    if side < HARD_MIN_CELLS * reach:
+        n_min = math.ceil(p["n"] * (HARD_MIN_CELLS * reach / side) ** 3)
+        raise ConfigError(f"{source}: {at}particles.n = {p['n']} is too small for protocol "
+                          f"{name}: the box must hold {HARD_MIN_CELLS} cells of the largest "
+                          f"diameter and skin per side; use n >= {n_min}")
+
+
 def _check_case(case: dict, source: str, at: str):
+    if case["protocol"]["name"] in HARD_SPHERE_PROTOCOLS:
+        _check_hard(case, source, at)
+        return
     p = case["particles"]
     c = case["contact"]
     pr = case["protocol"]

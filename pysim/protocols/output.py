@@ -52,7 +52,13 @@ class RunFiles:
         if not self.ckpt.exists():
             raise ResumeError(f"{self.ckpt}: no checkpoint to resume from; run without --resume")
         sim, extra = checkpoint.load(self.ckpt)
-        for name, size in extra["files"].items():
+        self.cut(extra["files"])
+        return sim, extra.get("driver", {})
+
+    def cut(self, sizes: dict):
+        """Cut the ``.part`` files back to the ``sizes`` a checkpoint recorded and open them
+        to append."""
+        for name, size in sizes.items():
             part = io.part_path(self.paths[name])
             have = part.stat().st_size if part.exists() else 0
             if have < size:
@@ -63,7 +69,6 @@ class RunFiles:
                 # the cut reaches the disk before the run appends over the freed space
                 os.fsync(fh.fileno())
         self.fh = {k: open(io.part_path(p), "a") for k, p in self.paths.items()}
-        return sim, extra.get("driver", {})
 
     # -- writing -------------------------------------------------------------------------
     def dump(self, sim):

@@ -70,7 +70,7 @@ CASES = [
      "spine_contact, tangential_spring, wall_friction"),
     (("protocol", "name"), "shake",
      "protocol.name = 'shake' is not allowed; use one of 'compress', 'growth', 'jammed', 'tapping', "
-     "'deposit'"),
+     "'deposit', 'ls', 'mls', 'fb'"),
     (("protocol", "name"), DROP, "missing key 'protocol.name'"),
     (("protocol", "phi_init"), 0.5, "protocol.phi_init = 0.5 cannot be reached by random "
                                     "insertion in 3-D; use a value <= 0.35 and compress"),
