@@ -179,6 +179,19 @@ def read_thermo(path) -> pd.DataFrame:
     return df.drop_duplicates(subset="step", keep="last").reset_index(drop=True)
 
 
+#: columns of ``blocks.dat``, the block table of pysim's hard-sphere runs (docs/formats.md)
+BLOCK_COLUMNS = ["step", "time", "phi", "rate", "reduced_pressure", "temperature", "stage"]
+
+
+def read_blocks(path) -> pd.DataFrame:
+    """``blocks.dat`` of a hard-sphere run: a row per block of collisions
+    (:data:`BLOCK_COLUMNS`; ``stage`` ``ls``, ``fb`` or ``mls``)."""
+    path = Path(path)
+    if not path.is_file():
+        raise FormatError(f"{path}: no such file (a hard-sphere run writes blocks.dat)")
+    return pd.read_csv(path, sep=r"\s+", comment="#", header=None, names=BLOCK_COLUMNS)
+
+
 class RunData:
     """The three common-format files of one run directory, read lazily."""
 

@@ -941,3 +941,46 @@ def growth_curves(runs, out, pc=None, title=None):
     if title:
         fig.suptitle(title, fontsize=10)
     _save(fig, out)
+
+
+def closest_jamming(points, out, references=None, title=None):
+    """Hard-sphere packings after Baranau & Tallarek (their Fig. 2): the density ``phi``
+    each compression reached (left) and its closest jamming density ``phi_J`` (right)
+    against the inverse compression rate ``1/gamma``, a colour per size spread ``sigma``
+    and a marker per algorithm (``protocol`` ``ls`` or ``fb``), one point per packing.
+
+    ``points``: :func:`analysis.closest_jamming.limits`'s input. ``references``: rows
+    ``sigma``, ``observable`` (``phi_rcp`` or ``phi_gcp``), ``value``: the paper's
+    limits, drawn as dashed (RCP) and dotted (GCP) lines in the colour of their sigma.
+    """
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2), sharey=True)
+    sigmas = sorted(points["sigma"].unique())
+    cmap = plt.get_cmap("viridis", max(len(sigmas), 2))
+    markers = {"ls": "o", "fb": "s"}
+    for k, sig in enumerate(sigmas):
+        colour = cmap(k)
+        for alg, g in points[points["sigma"] == sig].groupby("protocol"):
+            for ax, col in zip(axes, ("phi", "phi_j")):
+                ax.scatter(1.0 / g["rate"], g[col], s=18, marker=markers.get(alg, "^"),
+                           facecolors="none", edgecolors=[colour],
+                           label=f"$\\sigma$ = {sig:g}, {alg.upper()} (N = "
+                                 f"{', '.join(str(int(n)) for n in sorted(g['n'].unique()))})")
+        if references is not None:
+            for obs, ls in (("phi_rcp", "--"), ("phi_gcp", ":")):
+                ref = references[(references["observable"] == obs)
+                                 & np.isclose(references["sigma"].astype(float), sig)]
+                for v in ref["value"]:
+                    for ax in axes:
+                        ax.axhline(float(v), color=colour, lw=0.8, ls=ls)
+    for ax, what in zip(axes, ("density after the compression $\\phi$",
+                               "closest jamming density $\\phi_J$")):
+        ax.set_xscale("log")
+        ax.set_xlabel("inverse compression rate $1/\\gamma$")
+        ax.set_title(what, fontsize=10)
+    axes[0].set_ylabel("packing fraction")
+    axes[1].legend(fontsize=7, loc="lower right")
+    fig.text(0.5, 0.005, "paper (N = 10^4): dashed phi_RCP, dotted phi_GCP", ha="center",
+             fontsize=8)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    _save(fig, out)

@@ -250,6 +250,37 @@ def analyse_compression(run_dir, window, p_scale: float, c_min: int | None = Non
     return rows, curves, thermo
 
 
+def analyse_hard(run_dir, c_min: int | None = None):
+    """Observables of a hard-sphere run (pysim's ``ls``, ``fb`` and ``mls`` protocols,
+    Baranau & Tallarek 2014).
+
+    ``phi`` (the density the compression reached) and, after the closest-jamming search,
+    ``phi_j`` come from ``run.json``; ``reduced_pressure`` is the last block's ``Z``;
+    ``collisions_per_particle`` the run's work. With ``phi_j``, the last frame's near
+    contacts (gaps below the run's ``contact_gap``) give ``z_j`` (rattler-free: fewer
+    than ``c_min`` contacts, 4 by default, removed until none is left), ``z_j_with_rattlers``
+    and ``rattler_fraction_j``. Curves: the block table (:func:`analysis.io.read_blocks`).
+    """
+    import json
+
+    from analysis.io import read_blocks
+
+    run = RunData(run_dir)
+    rec = json.loads((Path(run_dir) / "run.json").read_text())
+    blocks = read_blocks(Path(run_dir) / "blocks.dat")
+    z_last = float(blocks["reduced_pressure"].iloc[-1]) if len(blocks) else np.nan
+    rows = [("phi", float(rec["phi"]), np.nan), ("reduced_pressure", z_last, np.nan),
+            ("collisions_per_particle", float(rec["collisions_per_particle"]), np.nan)]
+    if "phi_j" in rec:
+        frame, contacts = run.frames()[-1]
+        cn = ContactNumber(c_min).compute(frame, contacts)
+        rows += [("phi_j", float(rec["phi_j"]), np.nan), ("z_j", cn.z_rattler_free, np.nan),
+                 ("z_j_with_rattlers", cn.z, np.nan),
+                 ("rattler_fraction_j", cn.n_rattlers / frame.n, np.nan),
+                 ("mls_rate_decreases", float(rec.get("mls_rate_decreases", np.nan)), np.nan)]
+    return rows, blocks
+
+
 def analyse_growth(run_dir, c_min: int | None = None, friction: float = 0.0):
     """Observables and curves of a growth-to-jamming run (pysim's ``cycles.dat``).
 

@@ -58,6 +58,17 @@ OBSERVABLE_CONDITIONS = {
         "mode_fraction_low", "mode_fraction_middle", "mode_fraction_high",
         "omega_below_gap_exponent", "omega_low_exponent", "omega_middle_exponent")},
 }
+#: the hard-sphere packings' characteristic densities (analysis.closest_jamming): every
+#: sphere is in the density, rattlers included, as Baranau & Tallarek count it
+OBSERVABLE_CONDITIONS.update({name: {"rattlers": "counted"} for name in (
+    "phi_lt", "phi_rcp", "phi_gcp", "phi_gcp_minus_rcp", "phi_min_fast", "phi_max_fast_ls",
+    "phi_max_fast_fb", "phi_gcp_ls_initial", "phi_gcp_ls_densified", "phi_gcp_fb_initial",
+    "phi_gcp_fb_densified")})
+#: observables whose ``summary.csv`` uncertainty is a standard error (a fit's, or of a mean
+#: over packings), used as ours where a single row stands for many runs
+STANDARD_ERROR_OBSERVABLES = ("phi_gcp", "phi_gcp_minus_rcp", "phi_gcp_ls_initial",
+                              "phi_gcp_ls_densified", "phi_gcp_fb_initial",
+                              "phi_gcp_fb_densified", "phi_mean_fast_ls", "phi_mean_fast_fb")
 OUTPUT_COLUMNS = ["id", "paper", "where", "study", "kind", "engine", "observable", *POINT,
                   "layer", *CONDITION_COLUMNS, "paper_value", "paper_uncertainty",
                   "uncertainty_kind", "ours", "ours_uncertainty", "n_seeds", "diff_sigma",
@@ -167,6 +178,8 @@ def _same(a, b) -> bool:
 def _holds(ours, op: str, paper) -> bool:
     if not _given(ours):
         return False
+    if op == "=" and isinstance(paper, str) and "|" in paper:  # any of the alternatives
+        return any(_same(ours, _number_or_text(alt)) for alt in paper.split("|"))
     if op == "=":
         return _same(ours, paper)
     if not isinstance(ours, (int, float, np.number)):
@@ -314,6 +327,8 @@ def _value_rows(ref, runs, results) -> list[dict]:
             s, c = g.loc[worst[0], "study"], g.loc[worst[0], "case"]
             use = g[(g["study"] == s) & (g["case"] == c)]
         mean, sem, n = _stats(use["value"])
+        if n == 1 and obs in STANDARD_ERROR_OBSERVABLES:
+            sem = _float(use["uncertainty"].iloc[0])
         row = {**base, "engine": engine, "ours": mean, "ours_uncertainty": sem, "n_seeds": n,
                "runs": _runs_label(use), "note": note}
         if not len(good):

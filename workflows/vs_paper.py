@@ -42,7 +42,7 @@ def case_terms(case: dict) -> dict:
     ``bidisperse``, ``container``, ``width_over_length``, ``feed``); ``nan`` where a term
     does not apply."""
     nan = float("nan")
-    p, c, pr = case["particles"], case["contact"], case["protocol"]
+    p, c, pr = case["particles"], case.get("contact", {}), case["protocol"]  # hard spheres: none
     cont = case.get("container")
     alpha = float(p.get("aspect_ratio", 0.0))
     diam = p["diameter"]
@@ -119,10 +119,36 @@ def growth_rate_rows(study: str, root: Path) -> pd.DataFrame:
                          "value": g["value"], "uncertainty": float("nan")})
 
 
+def closest_jamming_rows(study: str, root: Path) -> tuple[pd.DataFrame, list[dict]]:
+    """The characteristic densities of a hard-sphere study (its ``closest_jamming.csv``,
+    workflows/scripts/closest_jamming.py) as ``summary.csv`` rows, and their run rows:
+    each filed under its own case, with the terms of its ``like`` run's case but the
+    table's ``protocol`` (``ls``, ``fb`` or ``fb+ls``) and ``rate`` (the slowest fast
+    compression behind a band's end, 0 for a zero-rate extrapolation)."""
+    path = root / study / "closest_jamming.csv"
+    if not path.is_file():
+        return pd.DataFrame(), []
+    t = pd.read_csv(path)
+    results = pd.DataFrame({"study": study, "case": t["case"], "engine": "pysim",
+                            "seed": t["seed"].astype(int), "observable": t["observable"],
+                            "value": t["value"], "uncertainty": t["uncertainty"]})
+    runs = []
+    for case, g in t.groupby("case", sort=True):
+        like = root / study / g["like"].iloc[0] / f"seed{int(g['like_seed'].iloc[0])}" / "case.yaml"
+        if not like.is_file():
+            continue
+        terms = {**case_terms(read_yaml(like)), "protocol": g["protocol"].iloc[0],
+                 "rate": float(g["rate"].iloc[0])}
+        runs.append({"study": study, "case": case, "engine": "pysim",
+                     "seed": int(g["seed"].iloc[0]), "results": str(root), **terms})
+    return results, runs
+
+
 def run_table(results_dirs) -> tuple[pd.DataFrame, pd.DataFrame]:
     """``(runs, results)`` of every ``summary.csv`` under ``results_dirs`` (with the band
-    fractions of any ``<study>/modes.csv`` and the cross-rate rows of any
-    ``<study>/growth_alpha*.csv`` beside it): one run row per
+    fractions of any ``<study>/modes.csv``, the cross-rate rows of any
+    ``<study>/growth_alpha*.csv`` and the characteristic densities of any
+    ``<study>/closest_jamming.csv`` beside it): one run row per
     ``study, case, engine, seed`` with :func:`case_terms` of its ``case.yaml``
     (``<results>/<study>/<case>/seed<k>/case.yaml``). A folder without a summary is
     skipped."""
@@ -137,6 +163,10 @@ def run_table(results_dirs) -> tuple[pd.DataFrame, pd.DataFrame]:
         parts += [mode_rows(study, root / study / "modes.csv")
                   for study in df["study"].unique() if (root / study / "modes.csv").is_file()]
         parts += [growth_rate_rows(study, root) for study in df["study"].unique()]
+        for study in df["study"].unique():
+            res, pseudo = closest_jamming_rows(study, root)
+            parts.append(res)
+            run_rows += pseudo
         terms_of: dict[tuple, dict] = {}
         for (study, case, engine, seed), _ in df.groupby(["study", "case", "engine", "seed"]):
             key = (study, case, seed)

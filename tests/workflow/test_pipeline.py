@@ -95,11 +95,13 @@ def test_bad_config_stops_before_anything_runs(tmp_path):
 
 @pytest.mark.parametrize("profile, trends", [("deposition_cohesion", True),
                                              ("deposition_janssen", False),
-                                             ("tapping_long", False)])
+                                             ("tapping_long", False),
+                                             ("random_packings_baranau", False)])
 def test_which_profiles_get_trends_and_sets_figures(tmp_path, profile, trends):
     """Deposits that vary only the Bond number (and what follows from it) get a trends
     figure; deposits that also vary the walls or the feed do not (a line through their
-    Bond numbers would mix those up); tapping studies get the per-set figure and table."""
+    Bond numbers would mix those up); tapping studies get the per-set figure and table;
+    hard-sphere studies the closest-jamming figure and table instead of trends."""
     r = subprocess.run([SNAKEMAKE, "--snakefile", str(ROOT / "Snakefile"), "--directory",
                         str(tmp_path), "--configfile",
                         str(ROOT / "workflows" / "config" / f"{profile}.yaml"), "--cores", "1",
@@ -108,6 +110,7 @@ def test_which_profiles_get_trends_and_sets_figures(tmp_path, profile, trends):
     rules = r.stdout + r.stderr
     assert ("plot_trends" in rules) == trends, rules[-2000:]
     assert ("plot_tapping_sets" in rules) == profile.startswith("tapping")
+    assert ("closest_jamming" in rules) == profile.endswith("baranau")
 
 
 def test_config_key_given_twice_stops_before_anything_runs(tmp_path):

@@ -209,6 +209,8 @@ def supports(engine: str, case: dict) -> str | None:
     """``None`` when the engine can run the case, else the reason it cannot (one line)."""
     if engine not in ENGINE_LIMITS:
         return f"unknown engine {engine!r}; valid: {', '.join(ENGINES)}"
+    if "contact" not in case and (engine, shape(case), case["protocol"]["name"]) not in ADAPTERS:
+        return _unsupported(engine, case)  # hard spheres: the peers' limits read the contact law
     for limit in ENGINE_LIMITS[engine]:
         reason = limit(engine, case)
         if reason:

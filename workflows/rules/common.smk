@@ -6,7 +6,7 @@ import json
 import os
 import sys
 
-from rodcase.case import ConfigError, read_yaml
+from rodcase.case import HARD_SPHERE_PROTOCOLS, ConfigError, read_yaml
 from workflows.studies import runs as expand_runs, validate_config, varying_parameters
 
 PYTHON = sys.executable
@@ -111,7 +111,12 @@ def get_final_output():
     protocol = {s: st["case"]["protocol"]["name"] for s, st in CFG["studies"].items()}
     tapping = {s for s, name in protocol.items() if name == "tapping"}
     deposit = {s for s, name in protocol.items() if name == "deposit"}
+    hard = {s for s, name in protocol.items() if name in HARD_SPHERE_PROTOCOLS}
     for study in sorted({s for s, _ in study_variants()}):
+        if study in hard:  # closest jamming densities against the compression rate
+            out += [f"{RESULTS}/{study}/figures/closest_jamming.png",
+                    f"{RESULTS}/{study}/closest_jamming.csv"]
+            continue
         if study in tapping:
             out.append(f"{RESULTS}/{study}/figures/tapping.png")
             out += [f"{RESULTS}/{study}/figures/sets.png", f"{RESULTS}/{study}/sets.csv"]
@@ -143,7 +148,8 @@ def get_final_output():
         if study in deposit:
             out.append(f"{RESULTS}/{study}/figures/{variant}.packing.png")
             continue
-        kinds = ["snapshots"] if study in tapping else ["pressure", "contacts", "phi_j", "packing"]
+        kinds = (["snapshots"] if study in tapping else ["packing"] if study in hard
+                 else ["pressure", "contacts", "phi_j", "packing"])
         out += expand(f"{RESULTS}/{study}/figures/{variant}.{{kind}}.png", kind=kinds)
     return out
 
@@ -158,3 +164,9 @@ def growth_groups(study):
             groups.setdefault(f"{case['particles'].get('aspect_ratio', 0.0):g}", []).append(
                 f"{RESULTS}/{r.run_dir}")
     return groups
+
+
+def hard_studies():
+    """The studies of hard spheres (protocols ls, mls, fb: rule closest_jamming)."""
+    return sorted({s for s, _ in study_variants()
+                   if CFG["studies"][s]["case"]["protocol"]["name"] in HARD_SPHERE_PROTOCOLS})

@@ -419,3 +419,26 @@ rule growth_rates:
     shell:
         "{PYTHON} -m workflows.scripts.growth_rates --figure {output.figure}"
         " --table {output.table} {params.dirs} 2> {log}"
+
+
+rule closest_jamming:
+    input:
+        lambda wc: [
+            f"{RESULTS}/{r.run_dir}/{name}"
+            for r in RUNS if r.study == wc.study
+            for name in ("observables.csv", "run.json")
+        ],
+    output:
+        figure=report(
+            f"{RESULTS}/{{study}}/figures/closest_jamming.png",
+            caption="../report/closest_jamming.rst",
+            category="{study}",
+        ),
+        table=f"{RESULTS}/{{study}}/closest_jamming.csv",
+    log:
+        f"{RESULTS}/{{study}}/figures/closest_jamming.log",
+    params:
+        dirs=lambda wc: " ".join(f"{RESULTS}/{r.run_dir}" for r in RUNS if r.study == wc.study),
+    shell:
+        "{PYTHON} -m workflows.scripts.closest_jamming --figure {output.figure}"
+        " --table {output.table} {params.dirs} 2> {log}"

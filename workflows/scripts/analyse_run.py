@@ -12,8 +12,9 @@ import sys
 from pathlib import Path
 
 from analysis.summary import (TIDY_COLUMNS, analyse_compression, analyse_deposit,
-                              analyse_growth, analyse_jammed, analyse_settled, analyse_tapping,
-                              problems, tidy)
+                              analyse_growth, analyse_hard, analyse_jammed, analyse_settled,
+                              analyse_tapping, problems, tidy)
+from rodcase.case import HARD_SPHERE_PROTOCOLS
 from rodcase.files import atomic_write_text
 from workflows.scripts import case_or_none
 from workflows.engines import settles
@@ -49,6 +50,38 @@ def deposit_geometry(case: dict) -> dict:
             "base_wall_id": -(2 * (dim - 1) + 1)}
 
 
+def analyse(case: dict, a, record: dict):
+    """``(rows, curves)`` of the run ``a.run`` by its protocol's analysis."""
+    if case["protocol"]["name"] in HARD_SPHERE_PROTOCOLS:  # no contact law
+        return analyse_hard(a.run, c_min=a.c_min)
+    p_scale = case["contact"]["k_n"] / case["particles"]["diameter"]["mean"]
+    rule = {"c_min": a.c_min, "friction": case["contact"]["friction"]}
+    if case["protocol"]["name"] == "growth":
+        rows, curves, _thermo = analyse_growth(a.run, **rule)
+    elif case["protocol"]["name"] == "jammed":
+        rows, curves, _thermo = analyse_jammed(a.run, **rule)
+    elif case["protocol"]["name"] == "tapping":
+        rows, curves, _thermo = analyse_tapping(a.run, **tap_plan(case))
+    elif settles(a.engine, case):  # LIGGGHTS rods: a settled bed, not a compression
+        rows, curves, _thermo = analyse_settled(a.run, case["protocol"]["settle"]["bulk"],
+                                                **rule)
+        settled = record.get("settled")
+        rows.append(("settled", float(settled) if settled is not None else float("nan"),
+                     float("nan")))
+    elif case["protocol"]["name"] == "deposit":
+        rows, curves = analyse_deposit(a.run, **deposit_geometry(case))
+        settled = record.get("settled")
+        rows.append(("settled", float(settled) if settled is not None else float("nan"),
+                     float("nan")))
+    else:
+        pr = case["protocol"]
+        # fit the slow stage only: the fast stage may overshoot into transient jamming
+        fit_from = pr["phi_fast"] if pr.get("phi_fast", pr["phi_init"]) > pr["phi_init"] else None
+        rows, curves, _thermo = analyse_compression(a.run, a.window, p_scale, fit_from=fit_from,
+                                                    **rule)
+    return rows, curves
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--case", required=True, type=Path)
@@ -76,31 +109,7 @@ def main(argv=None) -> int:
         atomic_write_text(a.observables, ",".join(cols) + "\n")
         atomic_write_text(a.curves, "step,phi\n")
         return 0
-    p_scale = case["contact"]["k_n"] / case["particles"]["diameter"]["mean"]
-    rule = {"c_min": a.c_min, "friction": case["contact"]["friction"]}
-    if case["protocol"]["name"] == "growth":
-        rows, curves, _thermo = analyse_growth(a.run, **rule)
-    elif case["protocol"]["name"] == "jammed":
-        rows, curves, _thermo = analyse_jammed(a.run, **rule)
-    elif case["protocol"]["name"] == "tapping":
-        rows, curves, _thermo = analyse_tapping(a.run, **tap_plan(case))
-    elif settles(a.engine, case):  # LIGGGHTS rods: a settled bed, not a compression
-        rows, curves, _thermo = analyse_settled(a.run, case["protocol"]["settle"]["bulk"],
-                                                **rule)
-        settled = record.get("settled")
-        rows.append(("settled", float(settled) if settled is not None else float("nan"),
-                     float("nan")))
-    elif case["protocol"]["name"] == "deposit":
-        rows, curves = analyse_deposit(a.run, **deposit_geometry(case))
-        settled = record.get("settled")
-        rows.append(("settled", float(settled) if settled is not None else float("nan"),
-                     float("nan")))
-    else:
-        pr = case["protocol"]
-        # fit the slow stage only: the fast stage may overshoot into transient jamming
-        fit_from = pr["phi_fast"] if pr.get("phi_fast", pr["phi_init"]) > pr["phi_init"] else None
-        rows, curves, _thermo = analyse_compression(a.run, a.window, p_scale, fit_from=fit_from,
-                                                    **rule)
+    rows, curves = analyse(case, a, record)
     df = tidy(rows, a.study, a.variant, a.engine, a.seed, json.loads(a.parameters))
     for key in PROVENANCE:
         df[key] = record.get(key, "unknown")
