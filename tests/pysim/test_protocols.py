@@ -405,3 +405,29 @@ def test_contraction_above_phi_grow_is_refused():
     with pytest.raises(Exception, match=r"contraction\.phi = 0\.6 must lie between "
                                         r"phi_init = 0\.3 and phi_grow = 0\.55"):
         validate_case(growth_case(50, 1, phi_grow=0.55, contraction={"phi": 0.6}))
+
+
+def test_growth_relaxed_by_damped_dynamics(tmp_path):
+    """relaxation md (Wouterse et al.'s relaxation): each cycle runs the equations of
+    motion with the case's damping at relaxation.dt until the total energy is zero
+    (unjammed) or stops falling (settled); the steps it ran count as the row's
+    iterations and advance the clock by relaxation.dt each; the spheres still jam near
+    0.64, every relaxation settled, and unjammed rows end at zero elastic energy."""
+    case = growth_case(100, 2, phi_grow=0.62, increment=0.01, tolerance=2e-3,
+                       energy_tol=1e-10,
+                       relaxation={"method": "md", "dt": 5e-5, "check_time": 0.05})
+    # a stronger background viscosity than the paper's 0.1: the free flight of an
+    # unjammed packing's spheres then dies out in a few time units, not tens
+    case["contact"]["gamma_bg"] = 2.0
+    out = run_case(tmp_path, case)
+    meta = json.loads((out / "run.json").read_text())
+    cycles = read_cycles(out / "cycles.dat")
+    assert 0.60 < meta["phi_j"] < 0.67 and meta["phi_j"] - meta["phi_j_low"] < 2e-3
+    assert (cycles.settled == 1).all() and (cycles.iterations % 1000 == 0).all()
+    jammed, free = cycles[cycles.jammed == 1], cycles[cycles.jammed == 0]
+    assert (jammed.e > 1e-10).all() and (free.e < 1e-10 / 4).all()
+    th = RunData(out).thermo.set_index("step")
+    # the first cycle follows the growth directly: its steps are the relaxation's
+    first = cycles.iloc[0]
+    grown_at = (first.step - first.iterations) * 1e-4  # the growth's dt from step 0
+    assert th.loc[first.step, "time"] == pytest.approx(grown_at + first.iterations * 5e-5)
