@@ -10,9 +10,13 @@ from __future__ import annotations
 import numpy as np
 
 from analysis.io import read_contact_frames, read_thermo
+from rodcase.case import HARD_SPHERE_PROTOCOLS
 
 #: overlap, as a fraction of the mean diameter, that no sane packing reaches
 MAX_OVERLAP = 0.25
+#: overlap, in mean diameters, above which hard spheres have passed through each other
+#: (round-off of the dump's 10 digits stays far below)
+HARD_OVERLAP = 1e-6
 
 
 def _contact_energy(case: dict, overlap: float, d: float) -> float:
@@ -37,6 +41,8 @@ def check_run(run_dir, case: dict, max_overlap: float | None = None) -> str | No
     from pathlib import Path
 
     run_dir = Path(run_dir)
+    if case["protocol"]["name"] in HARD_SPHERE_PROTOCOLS:
+        return check_hard_run(run_dir, case)
     if max_overlap is None:
         max_overlap = float(case["contact"].get("max_overlap", MAX_OVERLAP))
     th = read_thermo(run_dir / "thermo.dat")
@@ -64,4 +70,27 @@ def check_run(run_dir, case: dict, max_overlap: float | None = None) -> str | No
         if c.overlap[k] > max_overlap * d:
             return (f"overlap {c.overlap[k] / d:.3g} D between particles {c.i[k]} and {c.j[k]} "
                     f"at step {c.step} (limit {max_overlap} D)")
+    return None
+
+
+def check_hard_run(run_dir, case: dict) -> str | None:
+    """First sign of a broken hard-sphere run (pysim's ``ls``, ``fb``, ``mls``), or
+    ``None``: a non-finite packing fraction in ``thermo.dat`` (its force-biased rows have
+    no time, pressure or kinetic energy, docs/formats.md), or two spheres of a frame
+    overlapping by more than :data:`HARD_OVERLAP` mean diameters."""
+    from pathlib import Path
+
+    run_dir = Path(run_dir)
+    th = read_thermo(run_dir / "thermo.dat")
+    bad = ~np.isfinite(th["phi"].astype(np.float64).to_numpy())
+    if bad.any():
+        return f"non-finite packing fraction at step {int(th[bad].iloc[0].step)}"
+    d = case["particles"]["diameter"]["mean"]
+    for c in read_contact_frames(run_dir / "contacts.dump"):
+        if c.n == 0:
+            continue
+        k = int(np.argmax(c.overlap))
+        if c.overlap[k] > HARD_OVERLAP * d:
+            return (f"hard spheres {c.i[k]} and {c.j[k]} overlap by {c.overlap[k] / d:.3g} D "
+                    f"at step {c.step} (limit {HARD_OVERLAP} D)")
     return None

@@ -146,3 +146,34 @@ def test_rattler_rule_reaches_the_analysis_and_the_figures(tmp_path):
     figures = [ln for ln in out.splitlines() if "workflows.scripts.plot_study" in ln]
     assert analyse and all("--c-min 3" in ln for ln in analyse), out[-3000:]
     assert figures and all("--friction 0.5 --c-min 3" in ln for ln in figures), out[-3000:]
+
+
+def test_hard_sphere_study_end_to_end(tmp_path):
+    """A hard-sphere study (Baranau & Tallarek's LS protocol, pysim only, no contact law)
+    through every rule: the runs pass the runner's checks, their observables, the
+    closest-jamming table and figure, the snapshot, vs_paper and the report."""
+    results = tmp_path / "results"
+    cfg = tmp_path / "hs.yaml"
+    cfg.write_text(yaml.safe_dump({
+        "results": str(results), "engines": {"pysim": {"threads": 1}},
+        "studies": {"hs": {
+            "engines": ["pysim"], "seeds": [1, 2],
+            "case": {"particles": {"n": 200, "diameter": {"distribution": "mono", "mean": 1.0}},
+                     "protocol": {"name": "ls", "rate": 10.0,
+                                  "closest_jamming": {"final_rate": 0.05}},
+                     "output": {"dump_every": 1000}},
+            "variants": {"r10": {}}}}}))
+    base = [SNAKEMAKE, "--snakefile", str(ROOT / "Snakefile"), "--directory", str(tmp_path),
+            "--configfile", str(cfg)]
+    r = subprocess.run(base + ["--cores", "2", "--quiet", "all"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert pd.read_csv(results / "failures.csv").empty
+    summary = pd.read_csv(results / "summary.csv")
+    phi_j = summary[summary.observable == "phi_j"]
+    assert len(phi_j) == 2 and phi_j.value.between(0.6, 0.66).all()
+    table = pd.read_csv(results / "hs" / "closest_jamming.csv").set_index("observable")
+    assert table.loc["phi_lt", "value"] == phi_j.value.min()
+    assert (results / "hs" / "figures" / "closest_jamming.png").stat().st_size > 10_000
+    assert (results / "hs" / "figures" / "r10.packing.png").stat().st_size > 1000
+    vs_paper = pd.read_csv(results / "vs_paper.csv").set_index("id")
+    assert vs_paper.loc["baranau2014-01", "verdict"] == "conditions differ: n (ours 200, paper 10000)"
