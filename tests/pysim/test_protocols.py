@@ -407,6 +407,7 @@ def test_contraction_above_phi_grow_is_refused():
         validate_case(growth_case(50, 1, phi_grow=0.55, contraction={"phi": 0.6}))
 
 
+@pytest.mark.slow
 def test_growth_relaxed_by_damped_dynamics(tmp_path):
     """relaxation md (Wouterse et al.'s relaxation): each cycle runs the equations of
     motion with the case's damping at relaxation.dt until the total energy is zero

@@ -15,6 +15,8 @@ from analysis.vs_paper import match, read_references
 from tests.runs import run_case
 from workflows.vs_paper import run_table
 
+pytestmark = pytest.mark.slow  # two hard-sphere runs with the search: about 20 s
+
 ROOT = Path(__file__).resolve().parents[2]
 #: 200 spheres from Poisson starts, LS at rate 10 (fast), the search cut at rate 0.02
 CASE = {"particles": {"n": 200, "diameter": {"distribution": "mono", "mean": 1.0}},

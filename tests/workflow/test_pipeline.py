@@ -148,6 +148,7 @@ def test_rattler_rule_reaches_the_analysis_and_the_figures(tmp_path):
     assert figures and all("--friction 0.5 --c-min 3" in ln for ln in figures), out[-3000:]
 
 
+@pytest.mark.slow
 def test_hard_sphere_study_end_to_end(tmp_path):
     """A hard-sphere study (Baranau & Tallarek's LS protocol, pysim only, no contact law)
     through every rule: the runs pass the runner's checks, their observables, the
