@@ -33,6 +33,17 @@ def run_case(tmp_path, case, *extra):
     return tmp_path / "out"
 
 
+def analyse(out, case_path, study="s", variant="v", seed=1):
+    """The pipeline's analysis of the run in ``out`` (``observables.csv``, ``curves.csv``
+    beside its files), through its command line."""
+    r = subprocess.run([sys.executable, "-m", "workflows.scripts.analyse_run", "--case",
+                        str(case_path), "--run", str(out), "--study", study, "--variant",
+                        variant, "--seed", str(seed), "--engine", "pysim", "--observables",
+                        str(out / "observables.csv"), "--curves", str(out / "curves.csv")],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+
+
 def start_mid_run(case_path, data, out) -> subprocess.Popen:
     """A pysim run (checkpointing every chunk) in the background, returned once it has
     checkpointed and written 40 thermo lines: mid-run, for a signal to stop it."""
@@ -86,3 +97,30 @@ def assert_resumed_like_uninterrupted(thermo, full, restart_step):
     np.testing.assert_array_equal(mine.loc[before, "ke"], ref.loc[before, "ke"])
     after = mine.index[mine.index > restart_step][:2]
     np.testing.assert_allclose(mine.loc[after, "ke"], ref.loc[after, "ke"], rtol=0.05)
+
+
+def stopped_and_resumed(run, monkeypatch, stage_class, stop_at: int, full_dir, cut_dir) -> dict:
+    """A hard-sphere driver's ``run(out_dir, **options)`` stopped by Ctrl-C at the
+    ``stop_at``-th block of ``stage_class`` (checkpointing after every block), then resumed
+    into ``cut_dir``: its summary, once every file of the run is checked to hold the bytes
+    of the uninterrupted run in ``full_dir``."""
+    import pytest
+
+    step = stage_class.step
+    calls = {"n": 0}
+
+    def stop_after_a_while(self, arg):
+        calls["n"] += 1
+        if calls["n"] == stop_at:
+            raise KeyboardInterrupt
+        return step(self, arg)
+
+    monkeypatch.setattr(stage_class, "step", stop_after_a_while)
+    with pytest.raises(KeyboardInterrupt):
+        run(cut_dir, progress=False, checkpoint_every=0.0)
+    monkeypatch.setattr(stage_class, "step", step)
+    again = run(cut_dir, progress=False, resume=True)
+    for name in ("particles.dump", "contacts.dump", "thermo.dat", "blocks.dat"):
+        assert (cut_dir / name).read_bytes() == (full_dir / name).read_bytes(), name
+    return again
+

@@ -63,13 +63,23 @@ def check_run(run_dir, case: dict, max_overlap: float | None = None) -> str | No
         row = th[runaway].iloc[0]
         return (f"runaway kinetic energy {row.ke:.3g} (> {ke_max:.3g}, the energy of every "
                 f"particle in a contact overlapping {max_overlap} D) at step {int(row.step)}")
+    over = first_overlap_above(run_dir, max_overlap * d)
+    if over:
+        overlap, i, j, step = over
+        return (f"overlap {overlap / d:.3g} D between particles {i} and {j} at step {step} "
+                f"(limit {max_overlap} D)")
+    return None
+
+
+def first_overlap_above(run_dir, limit: float):
+    """``(overlap, i, j, step)`` of the largest overlap of the first frame of
+    ``contacts.dump`` that has one above ``limit`` (length), or ``None``."""
     for c in read_contact_frames(run_dir / "contacts.dump"):
         if c.n == 0:
             continue
         k = int(np.argmax(c.overlap))
-        if c.overlap[k] > max_overlap * d:
-            return (f"overlap {c.overlap[k] / d:.3g} D between particles {c.i[k]} and {c.j[k]} "
-                    f"at step {c.step} (limit {max_overlap} D)")
+        if c.overlap[k] > limit:
+            return float(c.overlap[k]), int(c.i[k]), int(c.j[k]), int(c.step)
     return None
 
 
@@ -86,11 +96,9 @@ def check_hard_run(run_dir, case: dict) -> str | None:
     if bad.any():
         return f"non-finite packing fraction at step {int(th[bad].iloc[0].step)}"
     d = case["particles"]["diameter"]["mean"]
-    for c in read_contact_frames(run_dir / "contacts.dump"):
-        if c.n == 0:
-            continue
-        k = int(np.argmax(c.overlap))
-        if c.overlap[k] > HARD_OVERLAP * d:
-            return (f"hard spheres {c.i[k]} and {c.j[k]} overlap by {c.overlap[k] / d:.3g} D "
-                    f"at step {c.step} (limit {HARD_OVERLAP} D)")
+    over = first_overlap_above(run_dir, HARD_OVERLAP * d)
+    if over:
+        overlap, i, j, step = over
+        return (f"hard spheres {i} and {j} overlap by {overlap / d:.3g} D at step {step} "
+                f"(limit {HARD_OVERLAP} D)")
     return None

@@ -12,7 +12,7 @@ from pysim.initial import sample_diameters, write_initial
 from pysim.io import read_particle_data
 from pysim.protocols import fb as fb_driver
 from rodcase.case import validate_case
-from tests.runs import run_case
+from tests.runs import run_case, stopped_and_resumed
 
 
 def reference_forces(x, dn, side, rho_out):
@@ -94,20 +94,6 @@ def test_fb_resumes_with_the_same_bytes(tmp_path, monkeypatch, stop_in):
     from pysim.hard.mls import MLS
 
     cls = FB if stop_in == "fb" else MLS
-    step = cls.step
-    calls = {"n": 0}
-
-    def stop_after_a_while(self, arg):
-        calls["n"] += 1
-        if calls["n"] == 5:
-            raise KeyboardInterrupt
-        return step(self, arg)
-
-    monkeypatch.setattr(cls, "step", stop_after_a_while)
-    with pytest.raises(KeyboardInterrupt):
-        fb_driver.run(case, init, tmp_path / "cut", progress=False, checkpoint_every=0.0)
-    monkeypatch.setattr(cls, "step", step)
-    again = fb_driver.run(case, init, tmp_path / "cut", progress=False, resume=True)
+    again = stopped_and_resumed(lambda out, **kw: fb_driver.run(case, init, out, **kw),
+                                monkeypatch, cls, 5, tmp_path / "full", tmp_path / "cut")
     assert again["phi_j"] == full["phi_j"] and again["phi"] == full["phi"]
-    for name in ("particles.dump", "contacts.dump", "thermo.dat", "blocks.dat"):
-        assert (tmp_path / "cut" / name).read_bytes() == (tmp_path / "full" / name).read_bytes()

@@ -11,7 +11,7 @@ from pysim.initial import write_initial
 from pysim.io import read_particle_data
 from pysim.protocols import ls as ls_driver
 from rodcase.case import ConfigError, validate_case
-from tests.runs import run_case
+from tests.runs import run_case, stopped_and_resumed
 
 LS_CASE = {"particles": {"n": 200, "diameter": {"distribution": "mono", "mean": 1.0}},
            "protocol": {"name": "ls", "rate": 10.0,
@@ -117,20 +117,6 @@ def test_resume_writes_what_the_uninterrupted_run_writes(tmp_path, monkeypatch):
     full = ls_driver.run(case, init, tmp_path / "full", progress=False)
     from pysim.hard.mls import MLS
 
-    step = MLS.step
-    calls = {"n": 0}
-
-    def stop_after_a_while(self, system):
-        calls["n"] += 1
-        if calls["n"] == 9:
-            raise KeyboardInterrupt
-        return step(self, system)
-
-    monkeypatch.setattr(MLS, "step", stop_after_a_while)
-    with pytest.raises(KeyboardInterrupt):
-        ls_driver.run(case, init, tmp_path / "cut", progress=False, checkpoint_every=0.0)
-    monkeypatch.setattr(MLS, "step", step)
-    again = ls_driver.run(case, init, tmp_path / "cut", progress=False, resume=True)
+    again = stopped_and_resumed(lambda out, **kw: ls_driver.run(case, init, out, **kw),
+                                monkeypatch, MLS, 9, tmp_path / "full", tmp_path / "cut")
     assert again["phi_j"] == full["phi_j"] and again["collisions"] == full["collisions"]
-    for name in ("particles.dump", "contacts.dump", "thermo.dat", "blocks.dat"):
-        assert (tmp_path / "cut" / name).read_bytes() == (tmp_path / "full" / name).read_bytes()

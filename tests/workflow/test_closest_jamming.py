@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 
 from analysis.vs_paper import match, read_references
-from tests.runs import run_case
+from tests.runs import analyse, run_case
 from workflows.vs_paper import run_table
 
 pytestmark = pytest.mark.slow  # two hard-sphere runs with the search: about 20 s
@@ -22,15 +22,6 @@ ROOT = Path(__file__).resolve().parents[2]
 CASE = {"particles": {"n": 200, "diameter": {"distribution": "mono", "mean": 1.0}},
         "protocol": {"name": "ls", "rate": 10.0, "closest_jamming": {"final_rate": 0.02}},
         "output": {"dump_every": 1000}}
-
-
-def _analyse(out, case_path, study, variant, seed):
-    r = subprocess.run([sys.executable, "-m", "workflows.scripts.analyse_run", "--case",
-                        str(case_path), "--run", str(out), "--study", study, "--variant",
-                        variant, "--seed", str(seed), "--engine", "pysim", "--observables",
-                        str(out / "observables.csv"), "--curves", str(out / "curves.csv")],
-                       capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
 
 
 @pytest.fixture(scope="module")
@@ -44,7 +35,7 @@ def results(tmp_path_factory):
         out = run_case(tmp, {**CASE, "seed": seed})
         pysim = tmp / "pysim"
         out.rename(pysim)
-        _analyse(pysim, tmp / "case.yaml", "hs", "sigma0_r10", seed)
+        analyse(pysim, tmp / "case.yaml", "hs", "sigma0_r10", seed)
         dirs.append(pysim)
     summary = pd.concat([pd.read_csv(d / "observables.csv") for d in dirs])
     summary.to_csv(root / "summary.csv", index=False)

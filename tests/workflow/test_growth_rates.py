@@ -9,16 +9,7 @@ import pandas as pd
 import pytest
 
 from tests.cases import growth_case
-from tests.runs import run_case
-
-
-def _analyse(out, case_path):
-    r = subprocess.run([sys.executable, "-m", "workflows.scripts.analyse_run", "--case",
-                        str(case_path), "--run", str(out), "--study", "s", "--variant", "v",
-                        "--seed", "1", "--engine", "pysim", "--observables",
-                        str(out / "observables.csv"), "--curves", str(out / "curves.csv")],
-                       capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
+from tests.runs import analyse, run_case
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +25,7 @@ def two_rates(tmp_path_factory):
                            tolerance=2e-3, contraction={"phi": 0.45, "increment": 0.05})
         case["output"] = {"thermo_every": 40, "dump_every": 40}
         out = run_case(tmp, case)
-        _analyse(out, tmp / "case.yaml")
+        analyse(out, tmp / "case.yaml")
         dirs.append(out)
     return dirs
 

@@ -15,7 +15,6 @@ paper (workflows/vs_paper.py). Failed runs and runs without the search are left 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -27,6 +26,7 @@ from analysis.plots import closest_jamming
 from analysis.vs_paper import read_references
 from rodcase.case import read_yaml
 from rodcase.files import atomic_write_text
+from workflows.runner import ok_runs
 
 #: the paper's tables (references/README.md)
 REFERENCES = Path(__file__).resolve().parents[2] / "references"
@@ -73,7 +73,7 @@ def main(argv=None) -> int:
     ap.add_argument("--table", type=Path, required=True)
     ap.add_argument("runs", nargs="+", type=Path)
     a = ap.parse_args(argv)
-    done = [d for d in a.runs if json.loads((d / "run.json").read_text()).get("status") == "ok"]
+    done = ok_runs(a.runs)
     loaded = [p for p in map(load, done) if p is not None]
     if not loaded:  # the failures are listed in failures.csv
         print(f"error: none of the {len(a.runs)} runs finished a closest-jamming search",

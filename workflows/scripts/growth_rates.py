@@ -14,7 +14,6 @@ run (``case``, ``seed``: what ``vs_paper`` matches to the paper): ``observable``
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -27,6 +26,7 @@ from analysis.plots import growth_curves
 from analysis.summary import pc_table
 from rodcase.case import read_yaml
 from rodcase.files import atomic_write_text
+from workflows.runner import ok_runs
 
 #: table rows: our observable, the curve column it reads
 RATE_OBSERVABLES = (("phi_c_rate_independent", "z"),
@@ -62,7 +62,7 @@ def main(argv=None) -> int:
     ap.add_argument("--table", type=Path, required=True)
     ap.add_argument("runs", nargs="+", type=Path)
     a = ap.parse_args(argv)
-    done = [d for d in a.runs if json.loads((d / "run.json").read_text()).get("status") == "ok"]
+    done = ok_runs(a.runs)
     if not done:  # the failures are listed in failures.csv
         print(f"error: none of the {len(a.runs)} runs finished", file=sys.stderr)
         return 2
