@@ -14,7 +14,6 @@ and ``like_seed``, a run whose case gives the other terms ``vs_paper`` matches t
 paper (workflows/vs_paper.py). Failed runs and runs without the search are left out."""
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
@@ -26,7 +25,7 @@ from analysis.plots import closest_jamming
 from analysis.vs_paper import read_references
 from rodcase.case import read_yaml
 from rodcase.files import atomic_write_text
-from workflows.runner import ok_runs
+from workflows.scripts import study_figure_args
 
 #: the paper's tables (references/README.md)
 REFERENCES = Path(__file__).resolve().parents[2] / "references"
@@ -68,12 +67,8 @@ def pseudo_cases(table: pd.DataFrame, points: pd.DataFrame) -> pd.DataFrame:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--figure", type=Path, required=True)
-    ap.add_argument("--table", type=Path, required=True)
-    ap.add_argument("runs", nargs="+", type=Path)
-    a = ap.parse_args(argv)
-    done = ok_runs(a.runs)
+    a = study_figure_args(__doc__, argv)
+    done = a.done
     loaded = [p for p in map(load, done) if p is not None]
     if not loaded:  # the failures are listed in failures.csv
         print(f"error: none of the {len(a.runs)} runs finished a closest-jamming search",

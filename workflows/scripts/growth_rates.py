@@ -13,7 +13,6 @@ run (``case``, ``seed``: what ``vs_paper`` matches to the paper): ``observable``
 (the paper's unit: relative growth per time step). Failed runs are left out."""
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
@@ -26,7 +25,7 @@ from analysis.plots import growth_curves
 from analysis.summary import pc_table
 from rodcase.case import read_yaml
 from rodcase.files import atomic_write_text
-from workflows.runner import ok_runs
+from workflows.scripts import study_figure_args
 
 #: table rows: our observable, the curve column it reads
 RATE_OBSERVABLES = (("phi_c_rate_independent", "z"),
@@ -57,12 +56,8 @@ def load(run_dir: Path) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--figure", type=Path, required=True)
-    ap.add_argument("--table", type=Path, required=True)
-    ap.add_argument("runs", nargs="+", type=Path)
-    a = ap.parse_args(argv)
-    done = ok_runs(a.runs)
+    a = study_figure_args(__doc__, argv)
+    done = a.done
     if not done:  # the failures are listed in failures.csv
         print(f"error: none of the {len(a.runs)} runs finished", file=sys.stderr)
         return 2
