@@ -950,8 +950,9 @@ def closest_jamming(points, out, references=None, title=None):
     and a marker per algorithm (``protocol`` ``ls`` or ``fb``), one point per packing.
 
     ``points``: :func:`analysis.closest_jamming.limits`'s input. ``references``: rows
-    ``sigma``, ``observable`` (``phi_rcp`` or ``phi_gcp``), ``value``: the paper's
-    limits, drawn as dashed (RCP) and dotted (GCP) lines in the colour of their sigma.
+    ``sigma``, ``observable`` (``phi_lt``, ``phi_rcp`` or ``phi_gcp``), ``value``: the
+    paper's limits, drawn as dash-dotted (LT), dashed (RCP) and dotted (GCP) lines in the
+    colour of their sigma.
     """
     fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2), sharey=True)
     sigmas = sorted(points["sigma"].unique())
@@ -966,7 +967,7 @@ def closest_jamming(points, out, references=None, title=None):
                            label=f"$\\sigma$ = {sig:g}, {alg.upper()} (N = "
                                  f"{', '.join(str(int(n)) for n in sorted(g['n'].unique()))})")
         if references is not None:
-            for obs, ls in (("phi_rcp", "--"), ("phi_gcp", ":")):
+            for obs, ls in (("phi_lt", "-."), ("phi_rcp", "--"), ("phi_gcp", ":")):
                 ref = references[(references["observable"] == obs)
                                  & np.isclose(references["sigma"].astype(float), sig)]
                 for v in ref["value"]:
@@ -979,8 +980,7 @@ def closest_jamming(points, out, references=None, title=None):
         ax.set_title(what, fontsize=10)
     axes[0].set_ylabel("packing fraction")
     axes[1].legend(fontsize=7, loc="lower right")
-    fig.text(0.5, 0.005, "paper (N = 10^4): dashed phi_RCP, dotted phi_GCP", ha="center",
-             fontsize=8)
-    if title:
-        fig.suptitle(title, fontsize=10)
+    note = ("paper (N = 10^4): dash-dot phi_LT, dashed phi_RCP, dotted phi_GCP"
+            if references is not None else "")
+    fig.suptitle("; ".join(t for t in (title, note) if t), fontsize=10)
     _save(fig, out)

@@ -76,8 +76,10 @@ def main(argv=None) -> int:
         return 2
     points = pd.DataFrame(loaded)
     refs = read_references(REFERENCES)
+    # the limits of Table 4 (the abstract's rounded ones repeat them)
     refs = refs[(refs["paper"] == "baranau2014") & (refs["kind"] == "value")
-                & refs["observable"].isin(["phi_rcp", "phi_gcp"])]
+                & refs["observable"].isin(["phi_lt", "phi_rcp", "phi_gcp"])
+                & refs["where"].str.contains("Table 4")]
     refs = refs.assign(sigma=pd.to_numeric(refs["sigma"], errors="coerce")).dropna(
         subset=["sigma"])
     closest_jamming(points, a.figure, references=refs,
