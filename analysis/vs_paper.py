@@ -433,7 +433,7 @@ def _trend_rows(ref, runs, results) -> list[dict]:
     keys = sorted(set().union(*per_value.values()))
     if not keys:
         return [{**base, "engine": "", "verdict": "not run"}]
-    out = []
+    out, matched = [], []
     for key in keys:
         engine = key[0]
         g = pd.concat([per_value[v][key] for v in over if key in per_value[v]])
@@ -473,6 +473,12 @@ def _trend_rows(ref, runs, results) -> list[dict]:
         else:
             row["verdict"], row["diff_sigma"] = _trend_verdict(points, ref.expect)
         out.append(row)
+        matched.append(bool(points))
+    # a study none of whose runs is under the paper's conditions is left out where
+    # another study has such runs (e.g. hard spheres beside the growth runs of a trend
+    # in the aspect ratio)
+    if any(matched):
+        out = [row for row, m in zip(out, matched) if m]
     return out
 
 

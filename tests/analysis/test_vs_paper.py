@@ -131,6 +131,27 @@ def test_trends():
     assert r.verdict == "not run" and "alpha 8" in r.note
 
 
+def test_a_trend_leaves_out_a_study_at_other_conditions():
+    """Another study with one point of the trend at other conditions (N = 512) adds no
+    row when a study under the paper's conditions exists, and is reported alone."""
+    runs, res = trend_data({0.5: 0.80, 1.0: 0.85, 4.0: 0.90})
+    other_runs, other_res = runs_and_results([0.84], alpha=1.0, n=512, case="small")
+    other_runs["study"] = other_res["study"] = "other"
+    both = match(refs(trend("increasing")), pd.concat([runs, other_runs]),
+                 pd.concat([res, other_res]))
+    assert list(both.verdict) == ["agrees"] and "other" not in both.iloc[0].runs
+    alone = match(refs(trend("increasing")), other_runs, other_res)
+    assert list(alone.verdict) == ["not run"]
+
+
+def test_alternatives_in_a_condition():
+    runs, res = runs_and_results([0.88, 0.88], protocol="ls")
+    either = match(refs(ref(conditions="dimension=2; protocol=ls|fb")), runs, res)
+    assert list(either.verdict) == ["agrees"]
+    other = match(refs(ref(conditions="dimension=2; protocol=fb|growth")), runs, res)
+    assert other.iloc[0].verdict == "conditions differ: protocol (ours ls, paper fb|growth)"
+
+
 def test_conditions_parse_and_reject_junk():
     assert parse_conditions("dimension=2; rate<=1e-9;law=harmonic") == [
         ("dimension", "=", 2.0), ("rate", "<=", 1e-9), ("law", "=", "harmonic")]
