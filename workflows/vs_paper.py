@@ -93,6 +93,14 @@ MODE_OBSERVABLES = ("mode_fraction_low", "mode_fraction_middle", "mode_fraction_
                     "omega_below_gap_exponent", "omega_low_exponent", "omega_middle_exponent")
 
 
+def summary_rows(study: str, case, seed, observable, value,
+                 uncertainty=float("nan")) -> pd.DataFrame:
+    """Columns of a study-level table as ``summary.csv`` rows of pysim runs."""
+    return pd.DataFrame({"study": study, "case": case, "engine": "pysim",
+                         "seed": pd.Series(seed).astype(int).to_numpy(),
+                         "observable": observable, "value": value, "uncertainty": uncertainty})
+
+
 def mode_rows(study: str, path: Path) -> pd.DataFrame:
     """The band fractions and frequency exponents of a study's ``modes.csv`` (one row per
     pysim stable state) as ``summary.csv`` rows, without an uncertainty (one state each;
@@ -101,10 +109,8 @@ def mode_rows(study: str, path: Path) -> pd.DataFrame:
     long = modes.melt(id_vars=["variant", "seed"],
                       value_vars=[c for c in MODE_OBSERVABLES if c in modes],
                       var_name="observable", value_name="value")
-    return pd.DataFrame({"study": study, "case": long["variant"], "engine": "pysim",
-                         "seed": long["seed"].str.removeprefix("seed").astype(int),
-                         "observable": long["observable"], "value": long["value"],
-                         "uncertainty": float("nan")})
+    return summary_rows(study, long["variant"], long["seed"].str.removeprefix("seed"),
+                        long["observable"], long["value"])
 
 
 def growth_rate_rows(study: str, root: Path) -> pd.DataFrame:
@@ -114,9 +120,7 @@ def growth_rate_rows(study: str, root: Path) -> pd.DataFrame:
     if not parts:
         return pd.DataFrame()
     g = pd.concat(parts, ignore_index=True)
-    return pd.DataFrame({"study": study, "case": g["case"], "engine": "pysim",
-                         "seed": g["seed"].astype(int), "observable": g["observable"],
-                         "value": g["value"], "uncertainty": float("nan")})
+    return summary_rows(study, g["case"], g["seed"], g["observable"], g["value"])
 
 
 def closest_jamming_rows(study: str, root: Path) -> tuple[pd.DataFrame, list[dict]]:
@@ -129,18 +133,18 @@ def closest_jamming_rows(study: str, root: Path) -> tuple[pd.DataFrame, list[dic
     if not path.is_file():
         return pd.DataFrame(), []
     t = pd.read_csv(path)
-    results = pd.DataFrame({"study": study, "case": t["case"], "engine": "pysim",
-                            "seed": t["seed"].astype(int), "observable": t["observable"],
-                            "value": t["value"], "uncertainty": t["uncertainty"]})
+    results = summary_rows(study, t["case"], t["seed"], t["observable"], t["value"],
+                           t["uncertainty"])
     runs = []
     for case, g in t.groupby("case", sort=True):
-        like = root / study / g["like"].iloc[0] / f"seed{int(g['like_seed'].iloc[0])}" / "case.yaml"
+        first = g.iloc[0]
+        like = root / study / first["like"] / f"seed{int(first['like_seed'])}" / "case.yaml"
         if not like.is_file():
             continue
-        terms = {**case_terms(read_yaml(like)), "protocol": g["protocol"].iloc[0],
-                 "rate": float(g["rate"].iloc[0])}
+        terms = {**case_terms(read_yaml(like)), "protocol": first["protocol"],
+                 "rate": float(first["rate"])}
         runs.append({"study": study, "case": case, "engine": "pysim",
-                     "seed": int(g["seed"].iloc[0]), "results": str(root), **terms})
+                     "seed": int(first["seed"]), "results": str(root), **terms})
     return results, runs
 
 
