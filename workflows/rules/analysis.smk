@@ -76,7 +76,6 @@ rule vs_paper:
         modes=lambda wc: [f"{RESULTS}/{s}/modes.csv" for s in modes_studies()],
         growth=lambda wc: [f"{RESULTS}/{s}/growth_alpha{a}.csv"
                            for s in sorted({s for s, _ in study_variants()})
-                           if CFG["studies"][s]["case"]["protocol"]["name"] == "growth"
                            for a in growth_groups(s)],
         closest_jamming=lambda wc: [f"{RESULTS}/{s}/closest_jamming.csv" for s in hard_studies()],
         references=sorted(glob.glob(os.path.join(REFERENCES, "*.csv"))),

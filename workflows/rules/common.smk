@@ -111,7 +111,7 @@ def get_final_output():
     protocol = {s: st["case"]["protocol"]["name"] for s, st in CFG["studies"].items()}
     tapping = {s for s, name in protocol.items() if name == "tapping"}
     deposit = {s for s, name in protocol.items() if name == "deposit"}
-    hard = {s for s, name in protocol.items() if name in HARD_SPHERE_PROTOCOLS}
+    hard = set(hard_studies())
     for study in sorted({s for s, _ in study_variants()}):
         if study in hard:  # closest jamming densities against the compression rate
             out += [f"{RESULTS}/{study}/figures/closest_jamming.png",
