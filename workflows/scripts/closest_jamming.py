@@ -26,9 +26,7 @@ from analysis.vs_paper import read_references
 from rodcase.case import read_yaml
 from rodcase.files import atomic_write_text
 from workflows.scripts import study_figure_args
-
-#: the paper's tables (references/README.md)
-REFERENCES = Path(__file__).resolve().parents[2] / "references"
+from workflows.vs_paper import REFERENCES
 
 
 def load(run_dir: Path) -> dict | None:
@@ -68,8 +66,7 @@ def pseudo_cases(table: pd.DataFrame, points: pd.DataFrame) -> pd.DataFrame:
 
 def main(argv=None) -> int:
     a = study_figure_args(__doc__, argv)
-    done = a.done
-    loaded = [p for p in map(load, done) if p is not None]
+    loaded = [p for p in map(load, a.done) if p is not None]
     if not loaded:  # the failures are listed in failures.csv
         print(f"error: none of the {len(a.runs)} runs finished a closest-jamming search",
               file=sys.stderr)

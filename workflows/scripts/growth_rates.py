@@ -57,11 +57,10 @@ def load(run_dir: Path) -> dict:
 
 def main(argv=None) -> int:
     a = study_figure_args(__doc__, argv)
-    done = a.done
-    if not done:  # the failures are listed in failures.csv
+    if not a.done:  # the failures are listed in failures.csv
         print(f"error: none of the {len(a.runs)} runs finished", file=sys.stderr)
         return 2
-    runs = sorted((load(d) for d in done), key=lambda r: -r["rate"])
+    runs = sorted((load(d) for d in a.done), key=lambda r: -r["rate"])
     alphas = {r["alpha"] for r in runs}
     if len(alphas) > 1:
         print(f"error: runs of several aspect ratios {sorted(alphas)}; give one", file=sys.stderr)
