@@ -209,11 +209,16 @@ def supports(engine: str, case: dict) -> str | None:
     """``None`` when the engine can run the case, else the reason it cannot (one line)."""
     if engine not in ENGINE_LIMITS:
         return f"unknown engine {engine!r}; valid: {', '.join(ENGINES)}"
-    # no deck first: the limits may read what such a case lacks (hard spheres: a contact law)
+    if "contact" not in case and (engine, shape(case), case["protocol"]["name"]) not in ADAPTERS:
+        return _unsupported(engine, case)  # hard spheres: the peers' limits read the contact law
+    for limit in ENGINE_LIMITS[engine]:
+        reason = limit(engine, case)
+        if reason:
+            return reason
     adapter = ADAPTERS.get((engine, shape(case), case["protocol"]["name"]))
     if adapter is None:
         return _unsupported(engine, case)
-    for limit in (*ENGINE_LIMITS[engine], *adapter.limits):
+    for limit in adapter.limits:
         reason = limit(engine, case)
         if reason:
             return reason
