@@ -11,7 +11,10 @@
 Stresses enter **compressive positive** (pass ``-sigma_zz`` of the tension-positive
 :class:`analysis.stress.StressProfile`). Parameters come from
 :func:`scipy.optimize.curve_fit`; with per-point errors ``sigma_err`` the covariance
-is absolute, otherwise scaled by the residual variance. Uncertainties are one standard
+is absolute, otherwise scaled by the residual variance; ``absolute_errors=False`` takes
+the errors as relative weights only and scales the covariance by the reduced chi-square
+(for errors estimated from a few samples each, which scatter too much to be taken at
+their word). Uncertainties are one standard
 error; derived quantities propagate the covariance to first order.
 """
 from __future__ import annotations
@@ -38,7 +41,8 @@ class JanssenFit(Observable):
     ``h_s``) or ``"classical"`` (``x = depth``; results ``sigma_m`` = ``sigma_inf`` and
     ``h_s`` = ``lambda``, plus ``K`` from ``mu_w`` or ``mu_w`` from ``K``);
     ``width`` ``W`` (needed by both forms), ``mu_w`` or ``K`` (classical only),
-    ``walls`` ``"cylinder"`` (factor 4) or ``"slot"`` (factor 2).
+    ``walls`` ``"cylinder"`` (factor 4) or ``"slot"`` (factor 2), ``absolute_errors``
+    (default true: ``sigma_err`` are standard errors; false: relative weights).
 
     ``compute(depth, sigma, sigma_err=None)``. Results: ``sigma_m``, ``sigma_m_err``,
     ``h_s``, ``h_s_err``, ``cov`` (2, 2), ``K``, ``K_err``, ``mu_w``, ``mu_w_err``
@@ -50,7 +54,7 @@ class JanssenFit(Observable):
                 "mu_w_err", "chi2", "dof", "residuals")
 
     def __init__(self, form: str = "saturation", width: float = 1.0, mu_w: float | None = None,
-                 K: float | None = None, walls: str = "cylinder"):
+                 K: float | None = None, walls: str = "cylinder", absolute_errors: bool = True):
         if form not in ("saturation", "classical"):
             raise ValueError(f"form must be 'saturation' or 'classical', got {form!r}")
         if not width > 0:
@@ -61,6 +65,7 @@ class JanssenFit(Observable):
             raise ValueError("give mu_w (to get K) or K (to get mu_w), not both")
         self.form, self.width, self.walls = form, float(width), walls
         self.friction, self.k_ratio = mu_w, K
+        self.absolute_errors = bool(absolute_errors)
 
     def compute(self, depth, sigma, sigma_err=None):
         depth = np.asarray(depth, dtype=np.float64)
@@ -82,7 +87,8 @@ class JanssenFit(Observable):
         reach = x[np.argmax(y >= 0.632 * s0)] if np.any(y >= 0.632 * s0) else float(np.max(x))
         p0 = (s0, max(float(reach), 1e-3 * float(np.ptp(x)) or 1.0))
         try:
-            popt, cov = curve_fit(janssen, x, y, p0=p0, sigma=err, absolute_sigma=err is not None,
+            popt, cov = curve_fit(janssen, x, y, p0=p0, sigma=err,
+                                  absolute_sigma=err is not None and self.absolute_errors,
                                   maxfev=20000)
         except RuntimeError as exc:
             raise JanssenFitError(f"Janssen fit did not converge: {exc}") from None

@@ -554,13 +554,19 @@ def deposit_profiles(runs, out):
     being a column whose walls hold nothing); one colour per variant, solid pysim,
     dashed LAMMPS, dotted LIGGGHTS.
 
+    Last, the polar distribution of the major axis of each grain's own stress (Hidalgo et
+    al.'s Fig. 5; an axis, so drawn at ``phi`` and ``phi + 180``; 0 is horizontal, 90
+    vertical).
+
     ``runs``: dicts with ``label``, ``engine``, ``index`` (colour), ``profile``
     (:func:`analysis.summary.analyse_deposit`), ``angles`` (degrees, final frame) and,
-    optionally, ``q_r`` (``(r / length, Q)``) and ``major`` (``(edges in degrees,
-    density, elements)``).
+    optionally, ``q_r`` (``(r / length, Q)``), ``major`` (``(edges in degrees,
+    density, elements)``) and ``major_particles`` (degrees, one per loaded grain).
     """
     fig, axes = plt.subplots(2, 4, figsize=(18, 8))
     axes = axes.ravel()
+    axes[7].remove()
+    axes[7] = fig.add_subplot(2, 4, 8, projection="polar")
     cmap = plt.get_cmap("tab10")
     top_mass = 0.0
     for r in runs:
@@ -583,6 +589,12 @@ def deposit_profiles(runs, out):
         if "major" in r and r["major"][2] > 0:
             edges, dens, _ = r["major"]
             axes[5].stairs(dens * np.pi / 180, edges, color=color, ls=ls)
+        if len(r.get("major_particles", [])):
+            edges = np.linspace(-np.pi, np.pi, 37)
+            a = np.radians(np.asarray(r["major_particles"], float))
+            dens, _ = np.histogram(np.concatenate([a, np.where(a > 0, a - np.pi, a + np.pi)]),
+                                   bins=edges, density=True)
+            axes[7].stairs(dens, edges, color=color, ls=ls)
         if "apparent_mass" in pr:
             axes[6].plot(pr.mass_above, pr.apparent_mass, color=color, ls=ls, marker=".")
             top_mass = max(top_mass, float(np.nanmax(pr.mass_above, initial=0.0)))
@@ -613,9 +625,10 @@ def deposit_profiles(runs, out):
     axes[6].set_ylabel(r"apparent mass $\sigma_{vv} W^{d-1} / g$")
     axes[6].set_title("Janssen: saturates when the walls hold weight", fontsize=8)
     axes[6].legend(fontsize=6)
+    axes[7].set_title("major axis of each grain's stress\n(polar density; 90 = vertical)",
+                      fontsize=8)
     handles, labels = axes[0].get_legend_handles_labels()
-    axes[7].axis("off")
-    axes[7].legend(handles, labels, fontsize=7, loc="upper left")
+    fig.legend(handles, labels, fontsize=7, loc="lower right")
     fig.suptitle("deposits: profiles versus depth (solid pysim, dashed LAMMPS, dotted LIGGGHTS)",
                  fontsize=9)
     fig.tight_layout()
@@ -624,15 +637,17 @@ def deposit_profiles(runs, out):
 
 def janssen_against_paper(panels, out):
     """Janssen profiles against a paper's fits, one column per case: top, the trace of
-    the mean stress ``tr sigma = d p`` (compressive positive) in the case's units against
-    the depth ``x = h / W``, with each run's saturation fit ``sigma_m (1 - exp(-x / h_s))``
-    (thin); bottom, the same profiles over their own fitted ``sigma_m`` beside the paper's
-    ``1 - exp(-x / h_s)`` (black), which compares saturation depths when the units of
-    the stresses cannot be matched. The paper's ``sigma_m`` and ``h_s`` are printed.
+    the mean stress (compressive positive) in the case's units against the depth ``x = h
+    / W``, with standard errors and each run's saturation fit ``sigma_m (1 - exp(-x /
+    h_s))`` (thin); bottom, the same profiles over their own fitted ``sigma_m`` beside
+    the paper's ``1 - exp(-x / h_s)`` (black), which compares saturation depths when the
+    units of the stresses cannot be matched. The paper's ``sigma_m`` and ``h_s`` are
+    printed.
 
     ``panels``: dicts with ``title``, ``runs`` (dicts ``label``, ``engine``, ``x``,
-    ``trace``, ``fit`` (array or ``None``), ``sigma_m``, ``h_s`` (NaN without a
-    saturation fit)) and ``paper`` (``None`` or a dict ``sigma_m``, ``h_s``, ``label``).
+    ``trace``, ``err`` (standard errors, or NaN), ``fit`` (``(x, values)`` or ``None``),
+    ``sigma_m``, ``h_s`` (NaN without a saturation fit)) and ``paper`` (``None`` or a
+    dict ``sigma_m``, ``h_s``, ``label``).
     """
     if not panels:
         message_figure(out, "no successful deposition run to draw: see failures.csv")
@@ -648,9 +663,13 @@ def janssen_against_paper(panels, out):
             ls = ENGINE_LINES.get(r["engine"], ":")
             x = np.asarray(r["x"], float)
             x_max = max(x_max, float(np.nanmax(x, initial=0.0)))
-            top.plot(r["trace"], x, color=color, ls=ls, marker=".", label=r["label"])
+            err = np.asarray(r.get("err", np.full(len(x), np.nan)), float)
+            top.errorbar(r["trace"], x, xerr=np.where(np.isfinite(err), err, 0.0), color=color,
+                         ls=ls, marker=".", capsize=2, elinewidth=0.6, label=r["label"])
             if r["fit"] is not None:
-                top.plot(r["fit"], x, color=color, ls=ls, lw=0.6)
+                fx, fy = r["fit"]
+                keep = np.asarray(fx, float) <= x_max
+                top.plot(np.asarray(fy)[keep], np.asarray(fx)[keep], color=color, ls=ls, lw=0.6)
             if np.isfinite(r["sigma_m"]):
                 shape.plot(np.asarray(r["trace"], float) / r["sigma_m"], x, color=color,
                            ls=ls, marker=".",
@@ -669,7 +688,7 @@ def janssen_against_paper(panels, out):
         else:
             top.set_title(f"{panel['title']}\nthe paper gives no fit here", fontsize=8)
         top.ticklabel_format(axis="x", style="sci", scilimits=(-3, 4))
-        top.set_xlabel(r"trace of the mean stress $\mathrm{tr}\,\sigma$ (case units)")
+        top.set_xlabel(r"trace of the mean stress in $5d \times 5d$ elements (case units)")
         shape.set_xlabel(r"$\mathrm{tr}\,\sigma / \sigma_m$ (each run its own fit)")
         shape.axvline(1.0, color="grey", lw=0.6, ls=":")
         if not any(np.isfinite(r["sigma_m"]) for r in panel["runs"]):

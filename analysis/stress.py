@@ -10,8 +10,10 @@ in ``V`` (tension positive). The pressure is ``p = -tr(sigma)/d``.
 * horizontal slabs (profiles versus depth): :class:`StressProfile`;
 * square (2-D) or cubic (3-D) elements: :class:`StressField`;
 * principal stresses and the direction of the major (most compressive) one:
-  :func:`principal_stresses`, :func:`major_axis_angle`, and how vertical those
-  directions are: :func:`major_axis_order`;
+  :func:`principal_stresses`, :func:`major_axis_angle`, per grain
+  :func:`particle_major_angles`, and how vertical those directions are:
+  :func:`major_axis_order`;
+* the trace of the mean stress in a grid of elements: :func:`element_trace`;
 * stresses on a wall from the wall rows of a contact table: :class:`WallStress`.
 
 Wall rows (``j <= 0``, :mod:`analysis.walls`) contribute their branch
@@ -136,6 +138,26 @@ def coarse_grain(frame: Frame, sigma_i: np.ndarray, edges: list) -> tuple[np.nda
     return total.reshape(*shape, 3, 3) / vol[..., None, None], count
 
 
+def _column_stresses(frame: Frame, contacts: Contacts, edges, lo: float, hi: float,
+                     columns: int) -> tuple[np.ndarray, np.ndarray]:
+    """Mean stress in elements: rows between consecutive ``edges`` along the vertical
+    axis, ``columns`` equal elements per horizontal axis of the container ``lo < x (, y)
+    < hi`` (particle-centre weighting). Returns ``(sigma (rows, columns^(d-1), 3, 3),
+    count (rows, columns^(d-1)))``."""
+    if not hi > lo:
+        raise ValueError(f"the container must have hi > lo, got lo = {lo}, hi = {hi}")
+    d, v = frame.dim, frame.vertical
+    spec = [None] * d
+    spec[v] = np.asarray(edges, dtype=np.float64)
+    for k in range(d):
+        if k != v:
+            spec[k] = np.linspace(lo, hi, columns + 1)
+    sig, cnt = coarse_grain(frame, particle_stress(frame, contacts), spec)
+    rows = len(spec[v]) - 1
+    return (np.moveaxis(sig, v, 0).reshape(rows, -1, 3, 3),
+            np.moveaxis(cnt, v, 0).reshape(rows, -1))
+
+
 def slab_stress_errors(frame: Frame, contacts: Contacts, edges, lo: float, hi: float,
                        columns: int) -> tuple[np.ndarray, np.ndarray]:
     """Standard errors of the vertical and mean horizontal normal stress in horizontal
@@ -149,20 +171,39 @@ def slab_stress_errors(frame: Frame, contacts: Contacts, edges, lo: float, hi: f
     length give honest errors, narrower ones underestimate them."""
     if columns < 2:
         raise ValueError(f"columns must be at least 2 to measure a spread, got {columns}")
-    if not hi > lo:
-        raise ValueError(f"the container must have hi > lo, got lo = {lo}, hi = {hi}")
     d, v = frame.dim, frame.vertical
-    horiz = [k for k in range(d) if k != v]
-    spec = [None] * d
-    spec[v] = np.asarray(edges, dtype=np.float64)
-    for k in horiz:
-        spec[k] = np.linspace(lo, hi, columns + 1)
-    sig, _ = coarse_grain(frame, particle_stress(frame, contacts), spec)
-    sig = np.moveaxis(sig, v, 0).reshape(len(spec[v]) - 1, -1, 3, 3)  # (slab, column, 3, 3)
+    sig, _ = _column_stresses(frame, contacts, edges, lo, hi, columns)
     n = sig.shape[1]
     s_vv = sig[:, :, v, v]
-    s_hh = np.mean([sig[:, :, k, k] for k in horiz], axis=0)
+    s_hh = np.mean([sig[:, :, k, k] for k in range(d) if k != v], axis=0)
     return s_vv.std(axis=1, ddof=1) / np.sqrt(n), s_hh.std(axis=1, ddof=1) / np.sqrt(n)
+
+
+def element_trace(frame: Frame, contacts: Contacts, edges, lo: float, hi: float,
+                  columns: int) -> tuple[np.ndarray, np.ndarray]:
+    """Trace of the mean stress tensor, compressive positive, ``-tr sigma`` (force /
+    length^(d-2)), in representative volume elements (Hidalgo et al., Eq. 4 and Fig. 6:
+    ``sigma_ab = (1/A) sum_i w_i sigma^i_ab`` with ``w_i = 1`` for a centre inside the
+    element): rows between consecutive ``edges`` along the vertical axis, ``columns``
+    equal elements per horizontal axis of the container ``lo < x (, y) < hi``. Returns
+    ``(trace (rows, columns^(d-1)), count (rows, columns^(d-1)))``, ``count`` the grain
+    centres in each element."""
+    if columns < 1:
+        raise ValueError(f"columns must be at least 1, got {columns}")
+    d = frame.dim
+    sig, cnt = _column_stresses(frame, contacts, edges, lo, hi, columns)
+    return -np.trace(sig[..., :d, :d], axis1=-2, axis2=-1), cnt
+
+
+def particle_major_angles(frame: Frame, contacts: Contacts) -> np.ndarray:
+    """Angle to the horizontal (radians, :func:`major_axis_angle`) of the major (most
+    compressive) principal axis of each grain's own stress ``sigma^i_ab = sum_c l^c_a
+    F^c_b`` (Hidalgo et al., Eq. 3 and Fig. 5), for the grains with a nonzero stress;
+    grains without contacts have no direction and are left out."""
+    d = frame.dim
+    sig = particle_stress(frame, contacts)
+    loaded = np.any(sig[:, :d, :d] != 0.0, axis=(1, 2))
+    return major_axis_angle(sig[loaded], d, frame.vertical)
 
 
 def _pressure_of(sigma, dim):

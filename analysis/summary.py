@@ -611,6 +611,54 @@ def _no_saturation(tag: str) -> list[tuple[str, float, float]]:
     return [(name, np.nan, np.nan) for name in names]
 
 
+def _trace_rve(frame, contacts, prof: pd.DataFrame, edges, width: float, top: float,
+               length: float) -> list[tuple[str, float, float]]:
+    """The paper's Janssen fit (Hidalgo et al., Fig. 6): the trace of the mean stress in
+    square elements :data:`STRESS_ELEMENT` particle lengths wide, in rows of
+    :data:`STRESS_ELEMENT` slabs from the base, against the depth of the row centre over
+    ``W``, weighted by the standard error over the row's elements (relative weights:
+    the covariance is scaled by the reduced chi-square, which is reported, since errors
+    from a few elements scatter too much to be taken at their word). Rows reaching above
+    the surface (elements partly empty) or holding an element with fewer than 3 grains
+    are left out. Writes ``trace_rve``, ``trace_rve_err`` (at the slab in the middle of
+    each row, NaN elsewhere) and ``trace_rve_fit`` into ``prof``; returns the rows
+    ``sigma_m_trace_rve``, ``h_s_trace_rve`` (in ``W``), ``chi2_dof_trace_rve``."""
+    from analysis.janssen import JanssenFit, JanssenFitError, janssen
+    from analysis.stress import element_trace
+
+    names = ("sigma_m_trace_rve", "h_s_trace_rve", "chi2_dof_trace_rve")
+    per = int(STRESS_ELEMENT)  # slabs of one particle length per row of elements
+    columns = max(int(round(width / (STRESS_ELEMENT * length))), 1)
+    row_edges = np.asarray(edges)[::per]
+    for col in ("trace_rve", "trace_rve_err", "trace_rve_fit"):
+        prof[col] = np.nan
+    if len(row_edges) < 2:
+        return [(name, np.nan, np.nan) for name in names]
+    trace, count = element_trace(frame, contacts, row_edges, 0.0, width, columns)
+    mean = trace.mean(axis=1)
+    err = (trace.std(axis=1, ddof=1) / np.sqrt(columns) if columns > 1
+           else np.full(len(mean), np.nan))
+    use = (row_edges[1:] <= top) & (count.min(axis=1) >= 3)
+    middle = per * np.arange(len(mean)) + per // 2  # the slab at each row's centre
+    use &= middle < len(prof)
+    at = middle[use]
+    prof.loc[at, "trace_rve"] = mean[use]
+    prof.loc[at, "trace_rve_err"] = err[use]
+    weights = prof.loc[at, "trace_rve_err"] if columns > 1 else None
+    try:
+        # a few elements per row make noisy errors: weights only, the covariance scaled
+        fit = JanssenFit(form="saturation", width=width, absolute_errors=False).compute(
+            prof.loc[at, "depth"], prof.loc[at, "trace_rve"], weights)
+    except (JanssenFitError, RuntimeError):
+        return [(name, np.nan, np.nan) for name in names]
+    if not fit.h_s < float(prof.loc[at, "x"].max()):  # straight: no saturation in the data
+        return [(name, np.nan, np.nan) for name in names]
+    prof["trace_rve_fit"] = janssen(prof["x"].clip(lower=0.0), fit.sigma_m, fit.h_s)
+    return [("sigma_m_trace_rve", float(fit.sigma_m), float(fit.sigma_m_err)),
+            ("h_s_trace_rve", float(fit.h_s), float(fit.h_s_err)),
+            ("chi2_dof_trace_rve", float(fit.chi2 / max(fit.dof, 1)), np.nan)]
+
+
 def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density: float = 1.0,
                     base_wall_id: int | None = None):
     """Observables of a settled deposit in a box of ``width`` ``W`` (the last frame):
@@ -635,7 +683,11 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
     * ``major_order``: how vertical the major principal stress axes are in square (cubic)
       elements of :data:`STRESS_ELEMENT` particle lengths holding 3 grains or more
       (:func:`analysis.stress.major_axis_order`: 1 all vertical, 0 spread uniformly, the
-      isotropic distribution of directions);
+      isotropic distribution of directions), and ``major_order_particles``, the same
+      over each grain's own stress tensor (the paper's Fig. 5);
+    * the paper's Janssen fit of the trace of the mean stress in elements
+      :data:`STRESS_ELEMENT` lengths square (its Fig. 6), ``sigma_m_trace_rve``,
+      ``h_s_trace_rve`` and ``chi2_dof_trace_rve`` (``_trace_rve``);
     * ``apparent_mass_fraction``: vertical force on the base over the deposit's weight
       (1 without wall friction; Janssen: below 1; grain ``density`` per volume, per area
       in 2-D), when ``base_wall_id`` names the base's rows in the contact table.
@@ -651,7 +703,8 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
     from analysis.janssen import JanssenFit, JanssenFitError, janssen
     from analysis.order import AngleToHorizontal
     from analysis.packing import FilledPackingFraction, cumulative_measure, slab_packing_fraction
-    from analysis.stress import StressField, StressProfile, slab_stress_errors
+    from analysis.stress import (StressField, StressProfile, major_axis_order,
+                                 particle_major_angles, slab_stress_errors)
 
     run = RunData(run_dir)
     frames = run.frames()
@@ -713,6 +766,9 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
     length = float(np.mean(frame.length + 2.0 * frame.radius))  # particle length L + D
     field = StressField(STRESS_ELEMENT * length, min_count=3).compute(frame, contacts)
     rows.append(("major_order", field.major_order, np.nan))
+    rows.append(("major_order_particles",
+                 major_axis_order(particle_major_angles(frame, contacts), d), np.nan))
+    rows += _trace_rve(frame, contacts, prof, edges, width, fill.top, length)
     if base_wall_id is not None:
         on_base = contacts.j == base_wall_id
         f_up = float(np.sum(contacts.force[on_base, v]))  # force on the grains from the base

@@ -58,3 +58,51 @@ def test_bad_inputs_are_named():
         JanssenFit().compute([1, 2], [1, 2])
     with pytest.raises(ValueError, match="not both"):
         JanssenFit(form="classical", mu_w=0.5, K=0.5)
+
+
+def test_trace_in_elements_is_fitted_as_the_papers_fig6(rng, monkeypatch):
+    """``analysis.summary._trace_rve``: rows of elements five slabs high across four
+    columns, a Janssen-shaped trace with noise in every element; the row means sit at the
+    slab in the middle of each row, rows reaching above the surface are left out, and
+    the weighted fit gives back sigma_m and h_s / W."""
+    import pandas as pd
+
+    import analysis.stress
+    from analysis.summary import _trace_rve
+
+    width, slab, top = 20.0, 1.0, 52.0  # 52 slabs deep: 10 whole rows, the 11th sticks out
+    edges = slab * np.arange(61)
+    centers = 0.5 * (edges[1:] + edges[:-1])
+    prof = pd.DataFrame({"depth": top - centers, "x": (top - centers) / width})
+    seen = {}
+
+    def fake(frame, contacts, row_edges, lo, hi, columns):
+        seen.update(row_edges=np.asarray(row_edges), columns=columns, lo=lo, hi=hi)
+        x = (top - 0.5 * (row_edges[1:] + row_edges[:-1])) / width
+        mean = janssen(np.clip(x, 0, None), 300.0, 0.9)
+        return mean[:, None] + rng.normal(0.0, 4.0, (len(mean), columns)), \
+            np.full((len(mean), columns), 5)
+
+    monkeypatch.setattr(analysis.stress, "element_trace", fake)
+    rows = {n: (v, e) for n, v, e in _trace_rve(None, None, prof, edges, width, top, 1.0)}
+    np.testing.assert_allclose(seen["row_edges"], 5.0 * np.arange(13))
+    assert (seen["columns"], seen["lo"], seen["hi"]) == (4, 0.0, 20.0)
+    at = np.flatnonzero(prof.trace_rve.notna())
+    np.testing.assert_array_equal(at, 5 * np.arange(10) + 2)  # rows 0-9, their middle slab
+    assert prof.trace_rve_err.notna().sum() == 10
+    s, s_err = rows["sigma_m_trace_rve"]
+    h, h_err = rows["h_s_trace_rve"]
+    assert abs(s - 300.0) < 4 * s_err and abs(h - 0.9) < 4 * h_err
+    # errors from four elements each are weights only: the parameter errors are those of
+    # the absolute fit times sqrt(chi2 / dof)
+    chi2_dof = rows["chi2_dof_trace_rve"][0]
+    use = prof.trace_rve.notna()
+    absolute = JanssenFit(width=width).compute(prof.depth[use], prof.trace_rve[use],
+                                               prof.trace_rve_err[use])
+    assert s == pytest.approx(absolute.sigma_m, rel=1e-9)
+    assert s_err == pytest.approx(absolute.sigma_m_err * np.sqrt(chi2_dof), rel=1e-6)
+    assert np.isfinite(prof.trace_rve_fit).all()
+    # too shallow for a row of elements: NaN, and no profile
+    shallow = prof.copy()
+    rows = _trace_rve(None, None, shallow, edges[:4], width, 3.0, 1.0)
+    assert all(np.isnan(v) for _, v, _ in rows) and shallow.trace_rve.isna().all()

@@ -5,9 +5,9 @@ import pytest
 
 from analysis.contacts import geometric_contacts
 from analysis.frame import Contacts
-from analysis.stress import (StressField, StressProfile, WallStress, major_axis_angle,
-                             major_axis_order, particle_stress, pressure, principal_stresses,
-                             stress_tensor)
+from analysis.stress import (StressField, StressProfile, WallStress, element_trace,
+                             major_axis_angle, major_axis_order, particle_major_angles,
+                             particle_stress, pressure, principal_stresses, stress_tensor)
 from analysis.walls import CylinderWall, PlaneWall, wall_contacts
 from tests.analysis.helpers import cubic, frame_of, square
 
@@ -209,3 +209,34 @@ def test_slab_stress_errors_are_the_spread_over_columns(dim):
         assert vv[s] > 0
     with pytest.raises(ValueError, match="columns must be at least 2"):
         slab_stress_errors(fr, c, edges, 0.0, m * a, 1)
+
+
+def test_element_trace_of_a_hydrostatic_lattice_and_its_counts():
+    """In a loaded square lattice every element holding whole particles carries the
+    box's trace, -tr sigma = 2 P, and counts its grain centres."""
+    a, k, m = 0.98, 1e4, 6
+    fr, c = loaded_lattice(2, a, k, m)
+    p = virial_pressure(fr, c, 2)
+    trace, count = element_trace(fr, c, [0.0, 3 * a, 6 * a], 0.0, m * a, 2)
+    assert trace.shape == count.shape == (2, 2)
+    np.testing.assert_allclose(trace, 2.0 * p, rtol=1e-12)
+    np.testing.assert_array_equal(count, 9)
+    with pytest.raises(ValueError, match="columns must be at least 1, got 0"):
+        element_trace(fr, c, [0.0, 3 * a], 0.0, m * a, 0)
+
+
+def test_particle_major_angles_follow_each_grains_load():
+    """Grains loaded only along a lattice direction turned by theta have their own major
+    axis along it; a grain without contacts has no direction and is left out."""
+    theta = 0.4
+    rot = np.array([[np.cos(theta), -np.sin(theta), 0], [np.sin(theta), np.cos(theta), 0],
+                    [0, 0, 1]])
+    x = np.vstack([(square(6) @ rot.T) + [20.0, 20.0, 0.0], [[50.0, 50.0, 0.0]]])
+    fr = frame_of(x, 0.5, [60.0, 60.0, 1.0], periodic=False)
+    c = geometric_contacts(fr, 1e-9)
+    along = np.abs(c.normal @ rot[:, 0]) > 0.5
+    c.force = -np.where(along[:, None], c.normal, 0.0)
+    ang = particle_major_angles(fr, c)
+    assert len(ang) == 36  # the lone grain at (50, 50) is left out
+    np.testing.assert_allclose(ang, theta, atol=1e-12)
+    assert major_axis_order(ang, 2) == pytest.approx(-np.cos(2 * theta))

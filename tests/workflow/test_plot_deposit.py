@@ -24,6 +24,9 @@ def test_deposit_figure_from_a_settled_run(tmp_path, monkeypatch):
     edges, dens, elements = run["major"]
     assert elements >= 1 and edges[0] == 0.0 and edges[-1] == 90.0
     assert np.sum(dens * np.diff(np.radians(edges))) == pytest.approx(1.0)
+    # each loaded grain's own major axis: an elevation in 3-D, for the grains in contact
+    per_grain = run["major_particles"]
+    assert 50 < len(per_grain) <= 60 and np.all((per_grain >= 0) & (per_grain <= 90))
     # and the real figure is drawn
     monkeypatch.undo()
     assert plot_deposit.main(["--out", str(tmp_path / "deposit.png"), str(rd)]) == 0

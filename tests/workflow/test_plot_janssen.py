@@ -1,5 +1,5 @@
-"""The Janssen figure against the paper: each run's trace profile and fit are read from
-its files, and the paper's fit is found by the case's aspect ratio and Bond number, with
+"""The Janssen figure against the paper: each run's element profile of the trace and its
+fit are read from its files, and the paper's fit is found by the case's aspect ratio and Bond number, with
 the paper's conditions the case does not meet listed."""
 import json
 
@@ -13,8 +13,9 @@ from tests.cases import FEED, changed
 from workflows.scripts import plot_janssen
 
 
-def _run(root, variant, width, n, bond, sigma_m_p=2.0, h_s=0.8):
-    """A finished 2-D run folder of d = 10 rods with a Janssen-shaped pressure profile."""
+def _run(root, variant, width, n, bond, sigma_m=4.0, h_s=0.8):
+    """A finished 2-D run folder of d = 10 rods with a Janssen-shaped element profile of
+    the trace at every fifth slab."""
     case = validate_case(changed(FEED, particles__aspect_ratio=9.0, particles__n=n,
                                  container__width=width, contact__bond_number=bond,
                                  contact__cohesion_range=1e-4,
@@ -24,12 +25,13 @@ def _run(root, variant, width, n, bond, sigma_m_p=2.0, h_s=0.8):
     run.mkdir(parents=True)
     (seed / "case.yaml").write_text(yaml.safe_dump(case))
     (run / "run.json").write_text(json.dumps({"status": "ok"}))
-    x = np.linspace(0.1, 2.0, 8)
-    p = sigma_m_p * (1.0 - np.exp(-x / h_s))
-    pd.DataFrame({"x": x, "pressure": p, "pressure_fit": p}).to_csv(run / "curves.csv",
-                                                                   index=False)
-    pd.DataFrame({"observable": ["sigma_m_trace", "h_s_p"],
-                  "value": [2.0 * sigma_m_p, h_s]}).to_csv(run / "observables.csv", index=False)
+    x = np.linspace(0.05, 2.0, 40)
+    fit = sigma_m * (1.0 - np.exp(-x / h_s))
+    rve = np.where(np.arange(40) % 5 == 2, fit, np.nan)
+    pd.DataFrame({"x": x, "pressure": fit / 2, "trace_rve": rve, "trace_rve_err": 0.1 * rve,
+                  "trace_rve_fit": fit}).to_csv(run / "curves.csv", index=False)
+    pd.DataFrame({"observable": ["sigma_m_trace_rve", "h_s_trace_rve"],
+                  "value": [sigma_m, h_s]}).to_csv(run / "observables.csv", index=False)
     return run
 
 
@@ -53,7 +55,12 @@ def test_paper_fit_by_case_and_its_unmet_conditions(tmp_path, monkeypatch):
     assert panels["bo1000"]["paper"] is None  # the paper fits no profile at Bo_g = 1e3
     (run,) = panels["paper_box"]["runs"]
     prof = pd.read_csv(runs[0] / "curves.csv")
-    np.testing.assert_allclose(run["trace"], 2.0 * prof.pressure)  # 2-D: trace = 2 p
+    rows = prof.trace_rve.notna()  # the rows of elements, not the slabs between them
+    assert len(run["x"]) == 8
+    np.testing.assert_allclose(run["x"], prof.x[rows])
+    np.testing.assert_allclose(run["trace"], prof.trace_rve[rows])
+    np.testing.assert_allclose(run["err"], prof.trace_rve_err[rows])
+    np.testing.assert_allclose(run["fit"][1], prof.trace_rve_fit)
     assert run["sigma_m"] == pytest.approx(4.0) and run["h_s"] == pytest.approx(0.8)
     # and the real figure is drawn
     monkeypatch.undo()

@@ -1,7 +1,8 @@
 """Figure of a deposition study: profiles of packing fraction and stresses versus depth
 with the Janssen fits, the orientation distributions, the radial orientation correlation
 ``Q(r)`` and the directions of the major principal stress in elements of five particle
-lengths, for every successful run (final frames)."""
+lengths and of each grain's own stress (the paper's polar plot), for every successful
+run (final frames)."""
 from __future__ import annotations
 
 import argparse
@@ -14,7 +15,7 @@ import pandas as pd
 from analysis import plots
 from analysis.io import RunData
 from analysis.order import OrientationCorrelation, angle_to_horizontal
-from analysis.stress import StressField
+from analysis.stress import StressField, particle_major_angles
 from analysis.summary import STRESS_ELEMENT
 from workflows.runner import ok_runs
 
@@ -41,7 +42,8 @@ def main(argv=None) -> int:
                      "angles": np.degrees(angle_to_horizontal(last)),
                      "q_r": (q.centers / length, q.q),
                      "major": (np.degrees(field.angle_edges), field.angle_hist,
-                               int(np.isfinite(field.major_angle).sum()))})
+                               int(np.isfinite(field.major_angle).sum())),
+                     "major_particles": np.degrees(particle_major_angles(last, contacts))})
     if not runs:
         plots.message_figure(a.out, "no successful deposition run to draw: see failures.csv")
         return 0

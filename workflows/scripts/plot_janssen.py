@@ -1,6 +1,7 @@
-"""Figure of a deposition study against its paper: the trace of the mean stress versus
-depth for every successful run, with our Janssen fits and, where the paper fits the same
-case (references/), the paper's saturation curve."""
+"""Figure of a deposition study against its paper: the trace of the mean stress in
+elements five particle lengths square versus depth (the paper's Fig. 6) for every
+successful run, with our Janssen fits and, where the paper fits the same case
+(references/), the paper's saturation curve."""
 from __future__ import annotations
 
 import argparse
@@ -18,12 +19,12 @@ from workflows.vs_paper import REFERENCES, case_terms, reference_rows
 
 
 def paper_fit(case: dict, references=REFERENCES) -> dict | None:
-    """The paper's Janssen fit of the trace at a case's point (``sigma_m_trace`` and
-    ``h_s_p`` rows of ``references``), or ``None`` where it gives none; ``unmet``: the
-    paper's conditions the case does not meet (width, N, feed, ...)."""
+    """The paper's Janssen fit of the trace at a case's point (``sigma_m_trace_rve`` and
+    ``h_s_trace_rve`` rows of ``references``), or ``None`` where it gives none;
+    ``unmet``: the paper's conditions the case does not meet (width, N, feed, ...)."""
     refs = reference_rows(case, references)
     fit, unmet = {}, []
-    for observable, key in (("sigma_m_trace", "sigma_m"), ("h_s_p", "h_s")):
+    for observable, key in (("sigma_m_trace_rve", "sigma_m"), ("h_s_trace_rve", "h_s")):
         rows = refs[refs.observable == observable]
         if len(rows) != 1:
             return None
@@ -34,20 +35,22 @@ def paper_fit(case: dict, references=REFERENCES) -> dict | None:
     return {**fit, "unmet": unmet}
 
 
-def run_profile(run: Path, dimension: int) -> dict:
-    """One run's trace profile, its fit and fitted values, from ``curves.csv`` and
-    ``observables.csv`` (:func:`analysis.summary.analyse_deposit`)."""
+def run_profile(run: Path) -> dict:
+    """One run's element profile of the trace (the rows where ``trace_rve`` is set), its
+    fit and fitted values, from ``curves.csv`` and ``observables.csv``
+    (:func:`analysis.summary.analyse_deposit`)."""
     prof = pd.read_csv(run / "curves.csv")
     obs = pd.read_csv(run / "observables.csv")
     val = dict(zip(obs.observable, obs.value))
-    fit = prof.get("pressure_fit")
+    rows = prof[prof.trace_rve.notna()]
+    fit = prof.trace_rve_fit
     return {"label": f"{run.parent.parent.name} {run.name} {run.parent.name}",
-            "engine": run.name, "x": prof.x.to_numpy(float),
-            "trace": dimension * prof.pressure.to_numpy(float),
-            "fit": dimension * fit.to_numpy(float) if fit is not None and fit.notna().any()
+            "engine": run.name, "x": rows.x.to_numpy(float),
+            "trace": rows.trace_rve.to_numpy(float), "err": rows.trace_rve_err.to_numpy(float),
+            "fit": (prof.x.to_numpy(float), fit.to_numpy(float)) if fit.notna().any()
             else None,
-            "sigma_m": float(val.get("sigma_m_trace", np.nan)),
-            "h_s": float(val.get("h_s_p", np.nan))}
+            "sigma_m": float(val.get("sigma_m_trace_rve", np.nan)),
+            "h_s": float(val.get("h_s_trace_rve", np.nan))}
 
 
 def main(argv=None) -> int:
@@ -66,8 +69,7 @@ def main(argv=None) -> int:
             continue
         if variant not in panels:
             panels[variant] = {"title": variant, "runs": [], "paper": paper_fit(case)}
-        dimension = int(case["particles"].get("dimension", 3))
-        panels[variant]["runs"].append(run_profile(run, dimension))
+        panels[variant]["runs"].append(run_profile(run))
     plots.janssen_against_paper([panels[v] for v in sorted(panels)], a.out)
     return 0
 
