@@ -196,6 +196,30 @@ def vs_paper(references, results_dirs) -> pd.DataFrame:
     return match(read_references(references), runs, results)
 
 
+def carry_forward(new: pd.DataFrame, old: pd.DataFrame) -> tuple[pd.DataFrame, int]:
+    """``(table, kept)``: ``new`` with the rows of an earlier table ``old`` that name runs
+    (``runs`` not empty) which ``new`` does not name for the same ``id``: the measurements
+    of runs whose results folders are not given this time (a long run done on another
+    machine). A row of ``new`` with runs replaces the old row of the same ``id`` and runs;
+    a row of ``new`` without runs (``not run``, nothing to compare) gives way to the old
+    rows of its ``id``. ``kept`` old rows are in ``table``; the order is ``new``'s."""
+    def named(df):
+        return df["runs"].notna() & (df["runs"].astype(str).str.strip() != "")
+
+    answered = named(new)
+    have = set(zip(new.loc[answered, "id"], new.loc[answered, "runs"].astype(str)))
+    old = old[named(old)]
+    kept = old[[(i, str(r)) not in have for i, r in zip(old["id"], old["runs"])]]
+    kept = kept.astype(object).reindex(columns=new.columns)
+    parts, n = [], 0
+    for ident, rows in new.groupby("id", sort=False):
+        ours = rows[answered.loc[rows.index]]
+        earlier = kept[kept["id"] == ident]
+        n += len(earlier)
+        parts.append(rows if not len(ours) and not len(earlier) else pd.concat([ours, earlier]))
+    return (pd.concat(parts, ignore_index=True) if parts else new), n
+
+
 def cell(x, digits: int = 4) -> str:
     """A table cell: a number to ``digits`` significant digits (whole numbers as such),
     empty for NaN or None, text as it is."""

@@ -92,6 +92,33 @@ def test_script_writes_the_table_and_the_notebook_block(tmp_path):
     assert (docs / "tapping.md").read_text() == text
 
 
+def test_keep_carries_the_earlier_answers_that_these_results_do_not_give(tmp_path):
+    refs = _refs(tmp_path)
+    results = _results(tmp_path)
+    out = tmp_path / "vs_paper.csv"
+    assert main(["--references", str(refs), "--results", str(results), "--out", str(out)]) == 0
+    earlier = pd.read_csv(out)
+    # the earlier table also answered the second row, from a run not on this machine
+    earlier.loc[1, ["verdict", "ours", "runs"]] = ["differs", 0.6, "elsewhere/an9"]
+    earlier.to_csv(tmp_path / "earlier.csv", index=False)
+    # this time no folder answers anything: both answers are kept, in the references' order
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert main(["--references", str(refs), "--results", str(empty), "--out", str(out),
+                 "--keep", str(tmp_path / "earlier.csv")]) == 0
+    table = pd.read_csv(out)
+    assert list(table.verdict) == ["agrees", "differs"] and table.runs.iloc[1] == "elsewhere/an9"
+    # a new answer from the same runs replaces the old one, and is not doubled
+    earlier.loc[0, "ours"] = 0.1
+    earlier.to_csv(tmp_path / "earlier.csv", index=False)
+    assert main(["--references", str(refs), "--results", str(results),
+                 "--out", str(out), "--keep", str(tmp_path / "earlier.csv")]) == 0
+    table = pd.read_csv(out)
+    assert len(table) == 2 and abs(table.ours.iloc[0] - 0.755) < 1e-12
+    assert main(["--references", str(refs), "--results", str(empty), "--out", str(out),
+                 "--keep", str(tmp_path / "none.csv")]) == 2
+
+
 def test_a_run_at_other_conditions(tmp_path):
     refs = _refs(tmp_path)
     results = _results(tmp_path, n=500, taps=4134)

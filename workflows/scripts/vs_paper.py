@@ -2,6 +2,11 @@
 
   python -m workflows.scripts.vs_paper --results results --out results/vs_paper.csv
   python -m workflows.scripts.vs_paper --results results /work/runs/* --docs docs/studies
+  python -m workflows.scripts.vs_paper --results /work/runs/* --keep docs/studies/vs_paper.csv \
+      --docs docs/studies
+
+``--keep`` carries over the rows of an earlier table whose runs (its ``runs`` column) these
+results folders do not hold: measurements of runs whose folders are elsewhere.
 
 ``--docs`` writes ``<docs>/vs_paper.csv`` and the verdict block at the top of every study
 notebook there (the table the study docs report, kept in git)."""
@@ -11,10 +16,13 @@ import argparse
 import sys
 from pathlib import Path
 
+import pandas as pd
+
 from analysis.vs_paper import ReferenceError, verdict_counts
 from rodcase.files import atomic_write_text
 from rodcase.case import ConfigError
-from workflows.vs_paper import REFERENCES, STUDY_DOCS, markdown_table, vs_paper, with_block
+from workflows.vs_paper import (REFERENCES, STUDY_DOCS, carry_forward, markdown_table,
+                                vs_paper, with_block)
 
 
 
@@ -29,11 +37,20 @@ def main(argv=None) -> int:
     ap.add_argument("--figure", type=Path, help="PNG of the published values against ours")
     ap.add_argument("--docs", type=Path,
                     help="study notebooks' folder: writes vs_paper.csv and their blocks")
+    ap.add_argument("--keep", type=Path,
+                    help="earlier vs_paper.csv whose rows stay where these results do not "
+                         "hold their runs")
     a = ap.parse_args(argv)
     if a.out is None and a.docs is None:
         ap.error("give --out, --docs or both")
     try:
         table = vs_paper(a.references, a.results)
+        if a.keep is not None:
+            if not a.keep.is_file():
+                raise ConfigError(f"--keep {a.keep}: no such file (give an earlier vs_paper.csv)")
+            table, kept = carry_forward(table, pd.read_csv(a.keep))
+            print(f"kept {kept} rows of {a.keep} whose runs these results do not hold",
+                  file=sys.stderr)
     except (ReferenceError, ConfigError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
