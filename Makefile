@@ -1,7 +1,7 @@
 # rodpack: two commands do everything.
 #   make run    set up, then run the default pipeline (quick profile) and build the report
 #   make test   set up, then the whole test suite (make check: the fast part)
-# Other targets: setup, liggghts, doctor, lint, clean, slurm-up, slurm-down.
+# Other targets: setup, liggghts, interim, doctor, lint, clean, slurm-up, slurm-down.
 SHELL   := /bin/bash
 PYTHON  ?= python3
 VENV    ?= .venv
@@ -15,7 +15,7 @@ RESULTS ?= $(or $(PROFILE_RESULTS),results)
 RESULTS_OPT := $(if $(filter command line environment,$(origin RESULTS)),--config results=$(RESULTS))
 STAMP   := $(VENV)/.stamp-setup
 
-.PHONY: setup liggghts run stop test check doctor lint clean bench slurm-up slurm-down
+.PHONY: setup liggghts run interim stop test check doctor lint clean bench slurm-up slurm-down
 
 setup: $(STAMP) liggghts
 
@@ -50,6 +50,10 @@ run: setup
 	$(VENV)/bin/snakemake --cores 1 --configfile $(CONFIG) $(RESULTS_OPT) --report $(RESULTS)/report.html
 	@$(PY) -m workflows.scripts.landing --results $(RESULTS) --print
 	@echo "results: $(RESULTS)/summary.csv $(RESULTS)/comparison.csv $(RESULTS)/vs_paper.csv $(RESULTS)/report.html"
+
+# the tables of a long profile from the runs finished so far (it may still be running)
+interim: setup
+	$(PY) -m workflows.scripts.interim --results $(RESULTS)
 
 # pause the pipeline running here (what Ctrl-C does); 'make run' resumes it
 stop:
