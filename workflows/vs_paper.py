@@ -196,20 +196,26 @@ def vs_paper(references, results_dirs) -> pd.DataFrame:
     return match(read_references(references), runs, results)
 
 
+def _studies(runs) -> frozenset:
+    """The studies of a ``runs`` cell (``study/case; study/case``)."""
+    return frozenset(part.strip().split("/")[0] for part in str(runs).split(";"))
+
+
 def carry_forward(new: pd.DataFrame, old: pd.DataFrame) -> tuple[pd.DataFrame, int]:
-    """``(table, kept)``: ``new`` with the rows of an earlier table ``old`` that name runs
-    (``runs`` not empty) which ``new`` does not name for the same ``id``: the measurements
-    of runs whose results folders are not given this time (a long run done on another
-    machine). A row of ``new`` with runs replaces the old row of the same ``id`` and runs;
-    a row of ``new`` without runs (``not run``, nothing to compare) gives way to the old
-    rows of its ``id``. ``kept`` old rows are in ``table``; the order is ``new``'s."""
+    """``(table, kept)``: ``new`` with the rows of an earlier table ``old`` whose runs
+    (``runs`` not empty) belong to studies that ``new`` does not answer for the same
+    ``id``: the measurements of runs whose results folders are not given this time (a
+    long run done on another machine). A row of ``new`` with runs replaces the old rows of
+    the same ``id`` and studies (a trend over a study's runs is that study's); a row of
+    ``new`` without runs (``not run``, nothing to compare) gives way to the old rows of its
+    ``id``. ``kept`` old rows are in ``table``; the order is ``new``'s."""
     def named(df):
         return df["runs"].notna() & (df["runs"].astype(str).str.strip() != "")
 
     answered = named(new)
-    have = set(zip(new.loc[answered, "id"], new.loc[answered, "runs"].astype(str)))
+    have = set(zip(new.loc[answered, "id"], map(_studies, new.loc[answered, "runs"])))
     old = old[named(old)]
-    kept = old[[(i, str(r)) not in have for i, r in zip(old["id"], old["runs"])]]
+    kept = old[[(i, _studies(r)) not in have for i, r in zip(old["id"], old["runs"])]]
     kept = kept.astype(object).reindex(columns=new.columns)
     parts, n = [], 0
     for ident, rows in new.groupby("id", sort=False):

@@ -115,6 +115,13 @@ def test_keep_carries_the_earlier_answers_that_these_results_do_not_give(tmp_pat
                  "--out", str(out), "--keep", str(tmp_path / "earlier.csv")]) == 0
     table = pd.read_csv(out)
     assert len(table) == 2 and abs(table.ours.iloc[0] - 0.755) < 1e-12
+    # so does one from the same study over other runs (a trend over the runs at hand)
+    earlier.loc[0, "runs"] = "tapping_x/an6; tapping_x/an7"
+    earlier.to_csv(tmp_path / "earlier.csv", index=False)
+    assert main(["--references", str(refs), "--results", str(results),
+                 "--out", str(out), "--keep", str(tmp_path / "earlier.csv")]) == 0
+    table = pd.read_csv(out)
+    assert list(table.runs) == ["tapping_x/an6", "elsewhere/an9"]
     assert main(["--references", str(refs), "--results", str(empty), "--out", str(out),
                  "--keep", str(tmp_path / "none.csv")]) == 2
 

@@ -5,8 +5,8 @@
   python -m workflows.scripts.vs_paper --results /work/runs/* --keep docs/studies/vs_paper.csv \
       --docs docs/studies
 
-``--keep`` carries over the rows of an earlier table whose runs (its ``runs`` column) these
-results folders do not hold: measurements of runs whose folders are elsewhere.
+``--keep`` carries over the rows of an earlier table whose studies (in its ``runs`` column)
+these results folders do not answer: measurements of runs whose folders are elsewhere.
 
 ``--docs`` writes ``<docs>/vs_paper.csv`` and the verdict block at the top of every study
 notebook there (the table the study docs report, kept in git)."""
@@ -39,7 +39,7 @@ def main(argv=None) -> int:
                     help="study notebooks' folder: writes vs_paper.csv and their blocks")
     ap.add_argument("--keep", type=Path,
                     help="earlier vs_paper.csv whose rows stay where these results do not "
-                         "hold their runs")
+                         "answer their studies")
     a = ap.parse_args(argv)
     if a.out is None and a.docs is None:
         ap.error("give --out, --docs or both")
@@ -49,7 +49,7 @@ def main(argv=None) -> int:
             if not a.keep.is_file():
                 raise ConfigError(f"--keep {a.keep}: no such file (give an earlier vs_paper.csv)")
             table, kept = carry_forward(table, pd.read_csv(a.keep))
-            print(f"kept {kept} rows of {a.keep} whose runs these results do not hold",
+            print(f"kept {kept} rows of {a.keep} whose studies these results do not answer",
                   file=sys.stderr)
     except (ReferenceError, ConfigError) as exc:
         print(f"error: {exc}", file=sys.stderr)
