@@ -60,10 +60,11 @@ stop:
 	$(PY) -m workflows.scripts.stop
 
 # two workers (one per core), each test file on one worker so a module's fixtures are
-# built once; TEST_WORKERS=0 runs in this process
+# built once; TEST_WORKERS=0 runs in this process. The 25 slowest tests are listed at the
+# end: CI allows the suite 20 minutes on 2 cores
 TEST_WORKERS ?= 2
 test: setup
-	$(VENV)/bin/pytest -q -n $(TEST_WORKERS) --dist loadfile
+	$(VENV)/bin/pytest -q -n $(TEST_WORKERS) --dist loadfile --durations=25
 
 # the developer's loop: no slow tests, no LAMMPS or LIGGGHTS runs, no SLURM
 check: setup
