@@ -196,33 +196,58 @@ def vs_paper(references, results_dirs) -> pd.DataFrame:
     return match(read_references(references), runs, results)
 
 
-def _studies(runs) -> frozenset:
-    """The studies of a ``runs`` cell (``study/case; study/case``)."""
-    return frozenset(part.strip().split("/")[0] for part in str(runs).split(";"))
+def _runs(cell) -> list[str]:
+    """The runs of a ``runs`` cell (``study/case; study/case``); none for an empty one."""
+    if cell is None or (isinstance(cell, float) and math.isnan(cell)):
+        return []
+    return [part.strip() for part in str(cell).split(";") if part.strip()]
+
+
+def _keeps_old(new: pd.DataFrame, old: pd.DataFrame | None) -> bool:
+    """Whether the old rows of one ``id`` and study stand against the new: a verdict
+    beats ``not run``, the new beats the old, and between two ``not run`` the one over
+    more runs (a trend whose runs are not all back yet keeps the earlier, fuller one)."""
+    if old is None or (new["verdict"].astype(str) != "not run").any():
+        return False
+    if (old["verdict"].astype(str) != "not run").any():
+        return True
+    return max(len(_runs(r)) for r in old["runs"]) > max(len(_runs(r)) for r in new["runs"])
 
 
 def carry_forward(new: pd.DataFrame, old: pd.DataFrame) -> tuple[pd.DataFrame, int]:
-    """``(table, kept)``: ``new`` with the rows of an earlier table ``old`` whose runs
-    (``runs`` not empty) belong to studies that ``new`` does not answer for the same
-    ``id``: the measurements of runs whose results folders are not given this time (a
-    long run done on another machine). A row of ``new`` with runs replaces the old rows of
-    the same ``id`` and studies (a trend over a study's runs is that study's); a row of
-    ``new`` without runs (``not run``, nothing to compare) gives way to the old rows of its
-    ``id``. ``kept`` old rows are in ``table``; the order is ``new``'s."""
-    def named(df):
-        return df["runs"].notna() & (df["runs"].astype(str).str.strip() != "")
+    """``(table, kept)``: ``new`` with the rows of an earlier table ``old`` that the runs
+    at hand do not supersede: the measurements of runs whose results folders are not given
+    this time (a long run done on another machine). Rows that name runs are matched by
+    ``id`` and the studies they draw on, and :func:`_keeps_old` chooses between them; a row
+    of ``new`` without runs gives way to the old rows of its ``id``. ``kept`` old rows
+    are in ``table``; the order is ``new``'s."""
+    def key(r):
+        return r["id"], frozenset(run.split("/")[0] for run in _runs(r["runs"]))
 
-    answered = named(new)
-    have = set(zip(new.loc[answered, "id"], map(_studies, new.loc[answered, "runs"])))
-    old = old[named(old)]
-    kept = old[[(i, _studies(r)) not in have for i, r in zip(old["id"], old["runs"])]]
-    kept = kept.astype(object).reindex(columns=new.columns)
+    old = old.astype(object).reindex(columns=new.columns)
+    old = old[[bool(_runs(r)) for r in old["runs"]]]
+    earlier: dict = {}
+    for i, r in old.iterrows():
+        earlier.setdefault(key(r), []).append(i)
     parts, n = [], 0
     for ident, rows in new.groupby("id", sort=False):
-        ours = rows[answered.loc[rows.index]]
-        earlier = kept[kept["id"] == ident]
-        n += len(earlier)
-        parts.append(rows if not len(ours) and not len(earlier) else pd.concat([ours, earlier]))
+        chosen, seen, groups = [], set(), {}
+        for i, r in rows.iterrows():
+            if _runs(r["runs"]):
+                groups.setdefault(key(r)[1], []).append(i)
+        for k, idx in groups.items():
+            o = earlier.get((ident, k))
+            if _keeps_old(rows.loc[idx], None if o is None else old.loc[o]):
+                chosen.append(old.loc[o])
+                n += len(o)
+            else:
+                chosen.append(rows.loc[idx])
+            seen.add(k)
+        for (i, k), o in earlier.items():
+            if i == ident and k not in seen:
+                chosen.append(old.loc[o])
+                n += len(o)
+        parts.append(pd.concat(chosen) if chosen else rows)
     return (pd.concat(parts, ignore_index=True) if parts else new), n
 
 

@@ -8,8 +8,8 @@ import yaml
 
 from analysis.vs_paper import read_references
 from workflows.scripts.vs_paper import main
-from workflows.vs_paper import (BLOCK_BEGIN, BLOCK_END, STUDY_DOCS, case_terms, family,
-                                markdown_table, run_table, with_block)
+from workflows.vs_paper import (BLOCK_BEGIN, BLOCK_END, STUDY_DOCS, carry_forward, case_terms,
+                                family, markdown_table, run_table, with_block)
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -122,6 +122,16 @@ def test_keep_carries_the_earlier_answers_that_these_results_do_not_give(tmp_pat
                  "--out", str(out), "--keep", str(tmp_path / "earlier.csv")]) == 0
     table = pd.read_csv(out)
     assert list(table.runs) == ["tapping_x/an6", "elsewhere/an9"]
+    # but a verdict is not given up for 'not run', nor a fuller 'not run' for a thinner one
+    table.loc[0, "verdict"] = "not run"
+    table.to_csv(tmp_path / "new.csv", index=False)
+    for verdict in ("agrees", "not run"):
+        earlier.loc[0, "verdict"] = verdict
+        got, n = carry_forward(pd.read_csv(tmp_path / "new.csv"), earlier)
+        assert n == 1 and got.runs.iloc[0] == "tapping_x/an6; tapping_x/an7"
+    earlier.loc[0, "runs"] = "tapping_x/an7"  # as many runs as the new row: the new stands
+    got, n = carry_forward(pd.read_csv(tmp_path / "new.csv"), earlier)
+    assert n == 0 and list(got.runs) == ["tapping_x/an6", "elsewhere/an9"]
     assert main(["--references", str(refs), "--results", str(empty), "--out", str(out),
                  "--keep", str(tmp_path / "none.csv")]) == 2
 
