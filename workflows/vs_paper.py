@@ -203,22 +203,27 @@ def _runs(cell) -> list[str]:
     return [part.strip() for part in str(cell).split(";") if part.strip()]
 
 
-def _keeps_old(new: pd.DataFrame, old: pd.DataFrame | None) -> bool:
-    """Whether the old rows of one ``id`` and study stand against the new: a verdict
-    beats ``not run``, the new beats the old, and between two ``not run`` the one over
-    more runs (a trend whose runs are not all back yet keeps the earlier, fuller one)."""
+def _standing(new: pd.DataFrame, old: pd.DataFrame | None) -> str:
+    """Which rows of one ``id`` and study stand, ``"new"``, ``"old"`` or ``"both"``: a
+    verdict beats ``not run``, the new beats the old, and of two ``not run`` the one whose
+    runs include the other's (a trend whose runs are not all back yet keeps the earlier,
+    fuller one); two over different runs both stand."""
     if old is None or (new["verdict"].astype(str) != "not run").any():
-        return False
+        return "new"
     if (old["verdict"].astype(str) != "not run").any():
-        return True
-    return max(len(_runs(r)) for r in old["runs"]) > max(len(_runs(r)) for r in new["runs"])
+        return "old"
+    runs_new = {r for cell in new["runs"] for r in _runs(cell)}
+    runs_old = {r for cell in old["runs"] for r in _runs(cell)}
+    if runs_old <= runs_new:
+        return "new"
+    return "old" if runs_new <= runs_old else "both"
 
 
 def carry_forward(new: pd.DataFrame, old: pd.DataFrame) -> tuple[pd.DataFrame, int]:
     """``(table, kept)``: ``new`` with the rows of an earlier table ``old`` that the runs
     at hand do not supersede: the measurements of runs whose results folders are not given
     this time (a long run done on another machine). Rows that name runs are matched by
-    ``id`` and the studies they draw on, and :func:`_keeps_old` chooses between them; a row
+    ``id`` and the studies they draw on, and :func:`_standing` chooses between them; a row
     of ``new`` without runs gives way to the old rows of its ``id``. ``kept`` old rows
     are in ``table``; the order is ``new``'s."""
     def key(r):
@@ -237,11 +242,12 @@ def carry_forward(new: pd.DataFrame, old: pd.DataFrame) -> tuple[pd.DataFrame, i
                 groups.setdefault(key(r)[1], []).append(i)
         for k, idx in groups.items():
             o = earlier.get((ident, k))
-            if _keeps_old(rows.loc[idx], None if o is None else old.loc[o]):
+            stand = _standing(rows.loc[idx], None if o is None else old.loc[o])
+            if stand != "old":
+                chosen.append(rows.loc[idx])
+            if stand != "new":
                 chosen.append(old.loc[o])
                 n += len(o)
-            else:
-                chosen.append(rows.loc[idx])
             seen.add(k)
         for (i, k), o in earlier.items():
             if i == ident and k not in seen:
