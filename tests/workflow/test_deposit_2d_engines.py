@@ -71,7 +71,7 @@ def test_feed_file_is_pysims_draws(tmp_path):
     assert list(dict.fromkeys(rows["id"])) == list(e.ids)
     for k, gid in enumerate(e.ids):
         mine = rows["id"] == gid
-        assert list(rows["try"][mine]) == list(range(mine.sum())) and mine.sum() >= 8
+        assert list(rows["try"][mine]) == list(range(mine.sum())) and mine.sum() >= 16
         assert set(rows["step"][mine]) == {e.step[k]}
         at = np.flatnonzero(mine & (rows["x"] == e.x[k, 0]) & (rows["y"] == e.x[k, 1]))
         assert len(at) == 1 and (rows["try"][at[0]] > 0) == e.redrawn[k]

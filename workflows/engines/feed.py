@@ -40,9 +40,10 @@ import numpy as np
 from workflows.engines.common import EngineError
 
 HEADER = "id,step,try,x,y,theta_deg,vx,vy"
-#: draws listed per grain at least (and two past the replay's choice): with a fifth of
-#: the first draws blocked, 8 leave about one grain in a million without a free one
-MIN_TRIES = 8
+#: draws listed per grain at least (and two past the replay's choice): with 40 % of the
+#: first draws blocked (10 grains/s into 2.5 m), 16 leave one grain in 3 million without
+#: a free one (the deck stops there)
+MIN_TRIES = 16
 
 
 @dataclass(frozen=True)
