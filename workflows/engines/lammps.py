@@ -107,6 +107,73 @@ def deposit_deck_vars(case: dict) -> dict[str, str]:
     return {k: repr(float(x)) if isinstance(x, float) else str(x) for k, x in v.items()}
 
 
+def deposit_2d_vars(case: dict) -> dict[str, str]:
+    """``-var`` values of the 2-D fed deposit deck (``in.2d.rods.deposit``): the grains'
+    size, disks and areal density, the feed's entry line and grain count (the entries
+    themselves are in the feed file, :mod:`workflows.engines.feed`), the law and settling
+    test of :func:`deposit_deck_vars`, with pysim's fed settling: no check passes before
+    the last grain's entry step, and ``max_steps`` is rounded up to a ``thermo.dat`` row."""
+    from pysim.protocols.deposit import entry_step
+
+    p, pr = case["particles"], case["protocol"]
+    v = {k: x for k, x in deposit_deck_vars(case).items()
+         if k not in ("spheres", "drag", "rain_steps")}
+    d = p["diameter"]["mean"]
+    length = p["aspect_ratio"] * d
+    every = int(v["thermo_every"])
+    max_steps = int(v["max_steps"])
+    v.update(grains=str(p["n"]), height=repr(float(pr["feed"]["height"])),
+             diameter=repr(float(d)), length=repr(float(length)),
+             rho=repr(float(p.get("density", 1.0))),
+             disks=str(glued_spheres(length, d, p.get("glued_spacing", 0.25))),
+             min_steps=str(max(int(v["min_steps"]), entry_step(p["n"] - 1, pr))),
+             max_steps=str(-(-max_steps // every) * every))
+    return v
+
+
+def fed_2d_deposit(engine: str, case: dict) -> str | None:
+    """The 2-D deposit deck feeds grains (``protocol.feed``; no raining column), replays
+    pysim's entries in free flight (no background drag), and needs 3 or more disks per rod
+    whose end and inner masses give the stadium's mass and inertia."""
+    from workflows.engines.feed import check_feed_case
+
+    why = check_feed_case(case)
+    if why:
+        return f"the LAMMPS 2-D deposit deck: {why}"
+    p = case["particles"]
+    if p["diameter"].get("distribution", "mono") != "mono":
+        return ("the LAMMPS 2-D deposit deck needs equal grains (particles.diameter."
+                f"distribution mono, got {p['diameter']['distribution']})")
+    d = p["diameter"]["mean"]
+    length = p["aspect_ratio"] * d
+    n = glued_spheres(length, d, p.get("glued_spacing", 0.25))
+    if disk_masses(d, length, n, 1.0) is None:
+        return (f"the LAMMPS 2-D deposit deck cannot give {n} disks (aspect ratio "
+                f"{p['aspect_ratio']}, glued_spacing {p.get('glued_spacing', 0.25)}) the "
+                "stadium's mass and inertia with positive masses; use a smaller glued_spacing")
+    return None
+
+
+def disk_masses(diameter: float, length: float, disks: int, density: float):
+    """``(m_end, m_inner)``: the masses of the end disks and of each inner disk of a rod of
+    ``disks`` equal disks along a spine of ``length`` that give it the stadium's mass
+    ``rho (D L + pi D^2/4)`` and moment of inertia (:func:`pysim.state.inertia_2d`), with
+    each disk's own ``2/5 m R^2`` as fix rigid/small counts it (the formulas of
+    ``in.2d.rods.deposit``'s header; mass units); ``None`` when no positive pair exists."""
+    from pysim.state import area, inertia_2d
+
+    if disks < 3:
+        return None
+    r = 0.5 * diameter
+    m = density * float(area(r, length))
+    inertia = float(inertia_2d(r, length, density))
+    s = np.linspace(-0.5 * length, 0.5 * length, disks)[1:-1]
+    s_bar = float(np.mean(s * s))
+    m_end = (inertia - 0.4 * r * r * m - m * s_bar) / (0.5 * length**2 - 2.0 * s_bar)
+    m_in = (m - 2.0 * m_end) / (disks - 2)
+    return (m_end, m_in) if m_end > 0 and m_in > 0 else None
+
+
 def deck_vars_2d(case: dict) -> dict[str, str]:
     """``-var`` values of ``in.2d.compress`` (see its header): the harmonic law, the drag
     per area, the two radii, disks per rod and the stages of the overdamped protocol."""
@@ -232,6 +299,8 @@ def convert_bodies(work: Path, case: dict, data: Path) -> dict:
 #: order of wall ids -(k + 1): (fix id, axis, at the far side x = W)
 GLUED_WALLS = (("wallx", 0, False), ("wallx", 0, True), ("wally", 1, False), ("wally", 1, True),
                ("base", 2, False))
+#: the same in 2-D (in.2d.rods.deposit: no y walls, the base at y = 0)
+GLUED_WALLS_2D = (("wallx", 0, False), ("wallx", 0, True), ("base", 1, False))
 
 
 def glued_wall_contacts(frame, table, cols, width: float):
@@ -240,12 +309,13 @@ def glued_wall_contacts(frame, table, cols, width: float):
     ``[2..4]`` the wall's force on the sphere, ``[5..7]`` the contact's point on the wall;
     rows of ``table`` in ``frame`` order): one row per touching sphere and wall, ``j`` the
     wall id of :data:`GLUED_WALLS` (pysim's numbering: x = 0, x = W, y = 0, y = W, base;
+    2-D, without ``f_wally`` columns: :data:`GLUED_WALLS_2D`, x = 0, x = W, base;
     the fix ``wallx`` holds both x walls, told apart by the point), normal from the sphere
     to the wall, overlap ``R - distance``, point in the middle of the overlap. Returns a
     :class:`analysis.frame.Contacts`."""
     c = {name: k for k, name in enumerate(cols)}
     walls = []
-    for fix, axis, far in GLUED_WALLS:
+    for fix, axis, far in GLUED_WALLS if "f_wally[1]" in c else GLUED_WALLS_2D:
         flag = table[:, c[f"f_{fix}[1]"]]
         force = table[:, [c[f"f_{fix}[{k}]"] for k in (2, 3, 4)]]
         wall = table[:, [c[f"f_{fix}[{k}]"] for k in (5, 6, 7)]]

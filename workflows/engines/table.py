@@ -16,6 +16,7 @@ from typing import Callable
 from workflows.engines import common, lammps, liggghts, pysim, restarts
 from workflows.engines.common import SHAPES, EngineError, inertial_only, shape
 from workflows.engines.data import write_body_data, write_glued_data
+from workflows.engines.feed import write_feed
 
 #: a limit: ``(engine, case) -> None`` when the deck can run the case, else the reason
 Limit = Callable[[str, dict], "str | None"]
@@ -34,6 +35,8 @@ class DataWriter:
 
 GLUED = DataWriter(write_glued_data, "glued.data", "vrods.txt")
 BODIES = DataWriter(write_body_data, "bodies.data", "measure.txt")
+#: the 2-D fed deposit deck creates its grains from a feed file (pysim's entries)
+FEED = DataWriter(write_feed, "feed.csv", "measure.txt")
 
 
 @dataclass(frozen=True)
@@ -126,6 +129,11 @@ _PEERS = [
     Adapter("lammps", "rods", "deposit", "lammps/in.rods.deposit",
             variables=lammps.deposit_deck_vars, clip=lammps.clip_vars, writer=GLUED,
             convert=lammps.convert_glued,
+            resume_vars=lammps.deposit_resume_vars, reports_settled=True, **_LAMMPS),
+    # 2-D rods fed one at a time from pysim's entries (the feed file is the deck's 'data')
+    Adapter("lammps", "rods 2-D", "deposit", "lammps/in.2d.rods.deposit",
+            variables=lammps.deposit_2d_vars, clip=lammps.clip_vars, writer=FEED,
+            convert=lammps.convert_glued, limits=(lammps.fed_2d_deposit,),
             resume_vars=lammps.deposit_resume_vars, reports_settled=True, **_LAMMPS),
     # LAMMPS body particles: one rounded segment per rod, contacts found afterwards; the
     # body pair styles have no damping clip (contact.limit_damping is refused)
