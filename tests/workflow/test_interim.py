@@ -4,7 +4,7 @@ import json
 import pandas as pd
 import yaml
 
-from tests.workflow.test_vs_paper import CASE_TAP, _refs
+from tests.workflow.helpers import CASE_TAP, reference_tables as _refs
 from workflows.scripts.interim import main
 
 

@@ -7,6 +7,7 @@ import pandas as pd
 import yaml
 
 from analysis.vs_paper import read_references
+from tests.workflow.helpers import CASE_TAP, reference_tables as _refs
 from workflows.scripts.vs_paper import main
 from workflows.vs_paper import (BLOCK_BEGIN, BLOCK_END, STUDY_DOCS, carry_forward, case_terms,
                                 family, markdown_table, run_table, with_block)
@@ -17,11 +18,6 @@ CASE_2D = {"particles": {"n": 1024, "dimension": 2, "aspect_ratio": 1.0,
                          "diameter": {"distribution": "bidisperse", "mean": 1.0, "ratio": 1.4}},
            "contact": {"law": "harmonic", "friction": 0.0},
            "protocol": {"name": "jammed", "rate": 1e-6}}
-CASE_TAP = {"particles": {"n": 1000, "aspect_ratio": 4.0,
-                          "diameter": {"distribution": "mono", "mean": 0.523e-3}},
-            "contact": {"law": "hooke", "restitution": 0.4, "friction": 0.5},
-            "container": {"shape": "cylinder", "diameter": 8e-3},
-            "protocol": {"name": "tapping", "intensity": 2.0, "taps": 1000}}
 
 
 def test_case_terms():
@@ -53,22 +49,6 @@ def _results(tmp_path, n=1000, taps=2000, values=(0.75, 0.76)):
                      "observable": "phi_tap2000", "value": v, "uncertainty": float("nan")})
     pd.DataFrame(rows).to_csv(root / "summary.csv", index=False)
     return root
-
-
-def _refs(tmp_path):
-    folder = tmp_path / "refs"
-    folder.mkdir()
-    cols = ["id", "paper", "where", "study", "kind", "observable", "alpha", "d", "sigma",
-            "e_n", "Gamma", "bo_g", "layer", "tap", "n", "value", "uncertainty",
-            "uncertainty_kind", "conditions", "vary", "over", "expect", "claim"]
-    row = dict.fromkeys(cols, "")
-    row.update(id="t-01", paper="t", where="Sec. 5", study="tapping", kind="value",
-               observable="phi_late", alpha=4, e_n=0.4, Gamma=2, tap=2000, n=1000,
-               value=0.75, uncertainty=0.01, uncertainty_kind="figure",
-               conditions="dimension=3;protocol=tapping", claim="density after 2000 taps")
-    other = {**row, "id": "t-02", "Gamma": 1.5}
-    pd.DataFrame([row, other], columns=cols).to_csv(folder / "t.csv", index=False)
-    return folder
 
 
 def test_script_writes_the_table_and_the_notebook_block(tmp_path):
