@@ -112,23 +112,19 @@ def entry_step(k: int, protocol: dict) -> int:
     return int(round(k / (protocol["feed"]["rate"] * protocol["dt"])))
 
 
-def entry(case: dict, k: int, radius: float, length: float, lo, others) -> tuple:
-    """Entry of fed grain ``k`` (radius, spine length): ``(x (3,), axis (3,), v (3,))`` in
-    the simulation's coordinates (the container's shifted by ``-lo``). The centre sits at
-    ``feed.height`` above the base, ``x`` uniform over the positions that keep the grain
-    inside the side walls, the spine angle uniform in ``[0, pi)``, the velocity of
-    magnitude ``feed.speed`` at an angle uniform in ``[0, 2 pi)``. ``others`` = ``(x, u,
-    radius, half)`` of the grains already in: a draw whose spine comes within ``R_i + R_k
-    + d_c`` of another spine is drawn again."""
-    from pysim.geometry import segment_closest_many
-
+def entry_draws(case: dict, k: int, radius: float, length: float, lo):
+    """The entry draws of fed grain ``k`` (radius, spine length), in the order
+    :func:`entry` tries them: an endless generator of ``(x (3,), axis (3,), v (3,))`` in
+    the simulation's coordinates (the container's shifted by ``-lo``), from the grain's
+    own stream ``default_rng([seed, k])``. The centre sits at ``feed.height`` above the
+    base, ``x`` uniform over the positions that keep the grain inside the side walls, the
+    spine angle uniform in ``[0, pi)``, the velocity of magnitude ``feed.speed`` at an
+    angle uniform in ``[0, 2 pi)``."""
     feed = case["protocol"]["feed"]
     w = case["container"]["width"]
-    d_c = cohesion_range(case)
     h = 0.5 * length
     rng = np.random.default_rng([int(case["seed"]), k])
-    ox, ou, orad, ohalf = others
-    for _ in range(ENTRY_TRIES):
+    while True:
         theta = rng.uniform(0.0, math.pi)
         u = np.array([math.cos(theta), math.sin(theta), 0.0])
         side = radius + h * abs(u[0])  # centre to the far edge along x
@@ -136,6 +132,20 @@ def entry(case: dict, k: int, radius: float, length: float, lo, others) -> tuple
         x[2] = 0.0
         ang = rng.uniform(0.0, 2.0 * math.pi)
         v = feed.get("speed", 0.0) * np.array([math.cos(ang), math.sin(ang), 0.0])
+        yield x, u, v
+
+
+def entry(case: dict, k: int, radius: float, length: float, lo, others) -> tuple:
+    """Entry of fed grain ``k`` (radius, spine length): ``(x (3,), axis (3,), v (3,))``,
+    the first of :func:`entry_draws` that is free. ``others`` = ``(x, u, radius, half)``
+    of the grains already in: a draw whose spine comes within ``R_i + R_k + d_c`` of
+    another spine is drawn again, up to :data:`ENTRY_TRIES` times."""
+    from pysim.geometry import segment_closest_many
+
+    d_c = cohesion_range(case)
+    h = 0.5 * length
+    ox, ou, orad, ohalf = others
+    for _, (x, u, v) in zip(range(ENTRY_TRIES), entry_draws(case, k, radius, length, lo)):
         reach = orad + radius + d_c
         near = np.flatnonzero(np.linalg.norm(ox - x, axis=1) < ohalf + h + reach)
         if len(near):
@@ -147,9 +157,10 @@ def entry(case: dict, k: int, radius: float, length: float, lo, others) -> tuple
                 continue
         return x, u, v
     raise FeedBlockedError(
-        f"fed grain {k} found no free spot on the entry line y = {feed['height']:g} in "
-        f"{ENTRY_TRIES} draws (the deposit has reached it, or grains enter faster than they "
-        "clear it); raise protocol.feed.height or lower protocol.feed.rate")
+        f"fed grain {k} found no free spot on the entry line y = "
+        f"{case['protocol']['feed']['height']:g} in {ENTRY_TRIES} draws (the deposit has "
+        "reached it, or grains enter faster than they clear it); raise protocol.feed.height "
+        "or lower protocol.feed.rate")
 
 
 def cohesion_range(case: dict) -> float:

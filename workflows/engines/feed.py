@@ -10,7 +10,7 @@ enter (20 per second in the paper's profile: 19 % of the grains are drawn again;
 a box 5 lengths wide at 5 per second), and which spots are blocked depends on where the
 grains near the line are, which differs between engines once two of them have touched.
 So the file lists, for every grain, the first draws of pysim's stream (at least
-:data:`MIN_TRIES`), and the deck applies pysim's rule to its own state: it takes the first
+:data:`MIN_TRIES`; :func:`pysim.protocols.deposit.entry_draws`), and the deck applies pysim's rule to its own state: it takes the first
 draw whose disks keep a gap above ``d_c`` from every disk in. Where the grains near the
 line have flown freely, that is pysim's choice: :func:`entries` replays pysim's
 :func:`~pysim.protocols.deposit.entry` with the earlier grains where free flight puts them
@@ -78,23 +78,15 @@ def check_feed_case(case: dict) -> str | None:
 
 
 def draws(case: dict, k: int, radius: float, length: float, lo, count: int):
-    """The first ``count`` entry draws of fed grain ``k`` from pysim's stream, in pysim's
-    coordinates (the container's less ``lo``): ``(x (count, 3), u (count, 3), v (count,
-    3))``, drawn as :func:`pysim.protocols.deposit.entry` draws them (angle, then x, then
-    the velocity's direction); :func:`write_feed` checks the first against pysim's."""
-    feed = case["protocol"]["feed"]
-    w = case["container"]["width"]
-    rng = np.random.default_rng([int(case["seed"]), k])
-    x, u, v = (np.zeros((count, 3)) for _ in range(3))
-    for t in range(count):
-        theta = rng.uniform(0.0, math.pi)
-        u[t] = [math.cos(theta), math.sin(theta), 0.0]
-        side = radius + 0.5 * length * abs(u[t, 0])
-        x[t] = np.array([rng.uniform(side, w - side), feed["height"], 0.0]) - lo
-        x[t, 2] = 0.0
-        ang = rng.uniform(0.0, 2.0 * math.pi)
-        v[t] = feed.get("speed", 0.0) * np.array([math.cos(ang), math.sin(ang), 0.0])
-    return x, u, v
+    """The first ``count`` entry draws of fed grain ``k`` from pysim's stream
+    (:func:`pysim.protocols.deposit.entry_draws`), in pysim's coordinates (the
+    container's less ``lo``): ``(x (count, 3), u (count, 3), v (count, 3))``."""
+    from itertools import islice
+
+    from pysim.protocols.deposit import entry_draws
+
+    x, u, v = zip(*islice(entry_draws(case, k, radius, length, lo), count))
+    return np.array(x), np.array(u), np.array(v)
 
 
 def entries(case: dict, init: dict) -> Entries:
@@ -118,13 +110,12 @@ def entries(case: dict, init: dict) -> Entries:
     u = np.zeros((n, 3))
     v0 = np.zeros((n, 3))
     redrawn = np.zeros(n, dtype=bool)
-    empty = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0))
     for k in range(n):
         t = (steps[k] - steps[:k]) * dt  # time each earlier grain has flown
         flown = x0[:k] + v0[:k] * t[:, None] + 0.5 * g * (t * t)[:, None]
         others = (flown, u[:k], radius[:k], 0.5 * length[:k])
         x0[k], u[k], v0[k] = entry(case, k, radius[k], length[k], lo, others)
-        first = entry(case, k, radius[k], length[k], lo, empty)[0]
+        first = draws(case, k, radius[k], length[k], lo, 1)[0][0]
         redrawn[k] = not np.array_equal(first, x0[k])
     theta = np.mod(np.arctan2(u[:, 1], u[:, 0]), math.pi)
     return Entries(np.asarray(init["ids"], dtype=np.int64), steps, x0[:, :2] + lo[:2], theta,
@@ -134,8 +125,7 @@ def entries(case: dict, init: dict) -> Entries:
 def write_feed(init_path, out_path, case: dict) -> float:
     """Write the feed file of a fed 2-D deposit (module docstring) from its initial data
     file and return the grains' total area (``2 L R + pi R^2`` each, length^2): the
-    adapter table's data writer for ``in.2d.rods.deposit``. Raises :class:`EngineError`
-    when the draws here are no longer pysim's (its first draw of a grain differs)."""
+    adapter table's data writer for ``in.2d.rods.deposit``."""
     from pysim.io import read_particle_data
     from pysim.state import area
     from rodcase.files import atomic_write_text
@@ -155,10 +145,6 @@ def write_feed(init_path, out_path, case: dict) -> float:
             pick = next(t for t in range(len(x)) if np.array_equal(x[t, :2] + lo[:2], e.x[k]))
             keep = max(MIN_TRIES, pick + 3)
             x, u, v = x[:keep], u[:keep], v[:keep]
-        if not np.array_equal(x[0], _first_entry(case, k, r, length, lo)):
-            raise EngineError(f"grain {k}: the feed's first draw {x[0]} is not pysim's; "
-                              "pysim.protocols.deposit.entry changed its draws: update "
-                              "workflows/engines/feed.py draws()")
         for t in range(len(x)):
             th = math.degrees(math.atan2(u[t, 1], u[t, 0]) % math.pi)
             c = (x[t, :2] + lo[:2]).tolist()
@@ -170,14 +156,6 @@ def write_feed(init_path, out_path, case: dict) -> float:
             f"{int(e.redrawn.sum())} grains take a later one", f"# {HEADER}"]
     atomic_write_text(out_path, "\n".join(head + rows + ["0,0,0,0,0,0,0,0"]) + "\n")
     return float(np.sum(area(init["radius"], init["length"])))
-
-
-def _first_entry(case, k, radius, length, lo):
-    """pysim's first draw of grain ``k`` (nothing else in the box)."""
-    from pysim.protocols.deposit import entry
-
-    none = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0))
-    return entry(case, k, radius, length, lo, none)[0]
 
 
 def read_feed(path) -> dict[str, np.ndarray]:
