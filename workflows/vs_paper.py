@@ -226,31 +226,31 @@ def carry_forward(new: pd.DataFrame, old: pd.DataFrame) -> tuple[pd.DataFrame, i
     ``id`` and the studies they draw on, and :func:`_standing` chooses between them; a row
     of ``new`` without runs gives way to the old rows of its ``id``. ``kept`` old rows
     are in ``table``; the order is ``new``'s."""
-    def key(r):
-        return r["id"], frozenset(run.split("/")[0] for run in _runs(r["runs"]))
+    def studies(cell):
+        return frozenset(run.split("/")[0] for run in _runs(cell))
 
     old = old.astype(object).reindex(columns=new.columns)
     old = old[[bool(_runs(r)) for r in old["runs"]]]
-    earlier: dict = {}
+    earlier: dict = {}  # id -> studies -> old row labels
     for i, r in old.iterrows():
-        earlier.setdefault(key(r), []).append(i)
+        earlier.setdefault(r["id"], {}).setdefault(studies(r["runs"]), []).append(i)
     parts, n = [], 0
     for ident, rows in new.groupby("id", sort=False):
-        chosen, seen, groups = [], set(), {}
+        chosen, groups = [], {}
         for i, r in rows.iterrows():
             if _runs(r["runs"]):
-                groups.setdefault(key(r)[1], []).append(i)
+                groups.setdefault(studies(r["runs"]), []).append(i)
+        olds = earlier.get(ident, {})
         for k, idx in groups.items():
-            o = earlier.get((ident, k))
+            o = olds.get(k)
             stand = _standing(rows.loc[idx], None if o is None else old.loc[o])
             if stand != "old":
                 chosen.append(rows.loc[idx])
             if stand != "new":
                 chosen.append(old.loc[o])
                 n += len(o)
-            seen.add(k)
-        for (i, k), o in earlier.items():
-            if i == ident and k not in seen:
+        for k, o in olds.items():
+            if k not in groups:
                 chosen.append(old.loc[o])
                 n += len(o)
         parts.append(pd.concat(chosen) if chosen else rows)
