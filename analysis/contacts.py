@@ -170,16 +170,18 @@ def parallel_side_contacts(frame: Frame, contacts: Contacts, angle_tol: float = 
 
 def end_bond_counts(frame: Frame, contacts: Contacts, apart: float = 0.25) -> np.ndarray:
     """Bonds per particle-particle contact (C,) by Marschall & Teitel's (2018) rule for a
-    side-to-side contact: its two end bonds (each end of one spine against the closest
-    point of the other, their Fig. 6; pysim's ``spine_contact: end_bonds``) count as two
-    where both overlap, ``|r_b| < R_i + R_j`` (or touch within the row's own gap, for
-    tables of contacts found with a tolerance); otherwise one. Overlapping bonds count as
-    one when their points lie within ``apart`` times the shorter spine of each other on
-    both spines (a tip against a tip, or a tilted pair touching near two ends: the same
-    contact, not the two ends of a side). Unlike :func:`parallel_side_contacts` no angle
-    enters: a pair tilted by less than about ``overlap / (L/2)`` has both ends in
-    contact. Overlaps near jamming are small, so this needs positions to more digits
-    than their ratio to the box (the dumps keep 10)."""
+    side-to-side contact: two bonds where the pair overlaps along a flat side of each,
+    otherwise one. The bonds are the end bonds (each end of one spine against the closest
+    point of the other, their Fig. 6; pysim's ``spine_contact: end_bonds``) that overlap,
+    ``|r_b| < R_i + R_j`` (or touch within the row's own gap, for tables of contacts
+    found with a tolerance). Two overlapping bonds are one contact when their points lie
+    within ``apart`` times the shorter spine of each other on either spine: a tip against
+    a tip, a tilted pair touching near two ends, or a tip against the middle of a side,
+    whose cap reaches both ends of a very short spine (overlap above about
+    ``L^2 / (8 (R_i + R_j))``) though it touches that side at one point. Unlike
+    :func:`parallel_side_contacts` no angle enters: a pair tilted by less than about
+    ``overlap / (L/2)`` has both ends in contact. Overlaps near jamming are small, so
+    this needs positions to more digits than their ratio to the box (the dumps keep 10)."""
     from analysis.geometry import end_bond_params
 
     a = frame.index_of(contacts.i)
@@ -201,8 +203,8 @@ def end_bond_counts(frame: Frame, contacts: Contacts, apart: float = 0.25) -> np
     for k in range(4):
         same = np.zeros(len(a), bool)
         for m in range(k):
-            same |= touch[:, m] & (np.abs(s[:, k] - s[:, m]) <= near) & \
-                (np.abs(t[:, k] - t[:, m]) <= near)
+            same |= touch[:, m] & ((np.abs(s[:, k] - s[:, m]) <= near) |
+                                   (np.abs(t[:, k] - t[:, m]) <= near))
         count += touch[:, k] & ~same
     return np.clip(count, 1, 2)
 

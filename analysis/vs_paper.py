@@ -15,8 +15,9 @@ reference row and engine:
   error of the seed mean), a ``band`` row agrees when ``|d| <= u_paper + 2 u_ours`` and
   every other row when ``|d| <= 2 u``;
 * values fitted across aspect ratios (:data:`FITS`: the small-alpha fit of the contact
-  number) are fitted to the runs' seed means and judged like a value row, with the fit's
-  standard error as ours;
+  number) are fitted to the runs' seed means at the row's ``over`` aspect ratios (``not
+  run`` while one lacks) and judged like a value row, with the fit's standard error as
+  ours; ``unresolved`` when that error exceeds the size of the fitted quantity;
 * trend rows (``expect`` increasing, decreasing or constant along ``over``): ``agrees``
   when every step moves as stated by more than two combined standard errors (constant:
   no step moves by more), ``differs`` when a step moves against it by more than that,
@@ -161,6 +162,8 @@ def _float(x) -> float:
 
 
 def _over(ref) -> list[float]:
+    if not _given(ref.over):
+        return []
     return [float(v) for v in str(ref.over).split(";") if v.strip()]
 
 
@@ -352,8 +355,9 @@ def _value_rows(ref, runs, results) -> list[dict]:
 
 
 #: values a paper fits across aspect ratios (Marschall & Teitel 2018, Fig. 8b):
-#: ``z - 4 = a + b alpha^x`` over the four smallest alpha > 0; name -> (observable fitted,
-#: parameter reported: ``x``, ``a`` or ``limit`` = ``4 + a``, the value as alpha -> 0+)
+#: ``z - 4 = a + b alpha^x`` over the aspect ratios of the row's ``over`` (else the four
+#: smallest alpha > 0 of the runs); name -> (observable fitted, parameter reported: ``x``,
+#: ``a`` or ``limit`` = ``4 + a``, the value as alpha -> 0+)
 FITS = {"z_j_bonds_fit_exponent": ("z_j_bonds", "x"),
         "z_j_bonds_fit_offset": ("z_j_bonds", "a"),
         "z_j_bonds_limit_alpha0": ("z_j_bonds", "limit"),
@@ -390,14 +394,21 @@ def _fit_rows(ref, runs, results) -> list[dict]:
     for (engine, study), g in groups.items():
         good, _, unchecked = _matching(g, conds, fitted)
         alphas = sorted(a for a in good["alpha"].astype(float).unique() if a > 0)
-        use = alphas[:FIT_POINTS]
         row = {**base, "engine": engine, "runs": _runs_label(good) if len(good) else study,
                "note": f"unchecked: {', '.join(unchecked)}" if unchecked else ""}
-        if len(use) < FIT_POINTS:
+        if _over(ref):
+            # the paper's own points: a fit over others is a different fit
+            use = _over(ref)
+            lack = [a for a in use if not np.isclose(alphas, a, rtol=RTOL, atol=0.0).any()]
+            short = (f"the fit takes alpha = {'; '.join(f'{a:g}' for a in use)}, "
+                     f"{study} lacks {'; '.join(f'{a:g}' for a in lack)}") if lack else ""
+        else:
+            use = alphas[:FIT_POINTS]
+            short = (f"the fit takes {FIT_POINTS} aspect ratios > 0 under the paper's "
+                     f"conditions, {study} has {len(use)}") if len(use) < FIT_POINTS else ""
+        if short:
             row["verdict"] = "not run"
-            row["note"] = "; ".join(x for x in (row["note"], f"the fit takes {FIT_POINTS} "
-                                   f"aspect ratios > 0 under the paper's conditions, "
-                                   f"{study} has {len(use)}") if x)
+            row["note"] = "; ".join(x for x in (row["note"], short) if x)
             out.append(row)
             continue
         stats = [_stats(good.loc[np.isclose(good["alpha"].astype(float), a), "value"])
@@ -412,8 +423,15 @@ def _fit_rows(ref, runs, results) -> list[dict]:
         row.update(ours=value, ours_uncertainty=u_ours, n_seeds=min(n for *_, n in stats),
                    diff_sigma=d / u if u > 0 else float("nan"),
                    verdict="agrees" if abs(d) <= 2.0 * u else "differs")
-        row["note"] = "; ".join(x for x in (row["note"], "fit over alpha = " + ", ".join(
-            f"{a:g}" for a in use)) if x)
+        notes = [row["note"], "fit over alpha = " + ", ".join(f"{a:g}" for a in use)]
+        # a fit whose error exceeds the size of what it measures (the jump a, or x) says
+        # nothing either way: not agreement
+        size = abs(base["paper_value"] - (4.0 if param == "limit" else 0.0))
+        if not (np.isfinite(u_ours) and u_ours <= size):
+            row["verdict"] = "unresolved"
+            notes.append(f"the fit does not determine {param} (standard error {u_ours:.3g} "
+                         f"against a size of {size:g})")
+        row["note"] = "; ".join(x for x in notes if x)
         out.append(row)
     return out or [{**base, "engine": "", "verdict": "not run",
                     "note": f"no run reports {fitted}"}]

@@ -204,18 +204,19 @@ def _runs(cell) -> list[str]:
 
 
 def _standing(new: pd.DataFrame, old: pd.DataFrame | None) -> str:
-    """Which rows of one ``id`` and study stand, ``"new"``, ``"old"`` or ``"both"``: a
-    verdict beats ``not run``, the new beats the old, and of two ``not run`` the one whose
-    runs include the other's (a trend whose runs are not all back yet keeps the earlier,
-    fuller one); two over different runs both stand."""
+    """Which rows of one ``id`` and study stand, ``"new"``, ``"old"`` or ``"both"``: the
+    new beats the old, except that a ``not run`` missing some of the old row's runs gives
+    way to it (a trend whose runs are not all back yet keeps the earlier, fuller one; a
+    verdict beats such a ``not run``); two ``not run`` over different runs both stand. A
+    ``not run`` over all the old row's runs stands: the rule or the reference changed."""
     if old is None or (new["verdict"].astype(str) != "not run").any():
         return "new"
-    if (old["verdict"].astype(str) != "not run").any():
-        return "old"
     runs_new = {r for cell in new["runs"] for r in _runs(cell)}
     runs_old = {r for cell in old["runs"] for r in _runs(cell)}
     if runs_old <= runs_new:
         return "new"
+    if (old["verdict"].astype(str) != "not run").any():
+        return "old"
     return "old" if runs_new <= runs_old else "both"
 
 

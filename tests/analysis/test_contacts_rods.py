@@ -429,6 +429,33 @@ def test_end_bonds_count_a_side_contact_twice_when_both_ends_overlap():
     assert end_bond_counts(fr, c).tolist() == [1]
 
 
+def test_end_bonds_count_a_tip_against_a_short_spines_side_once():
+    """A tip square to the middle of a very short spine (alpha 0.001) overlaps both of
+    that spine's end bonds once the overlap passes the curvature scale
+    ``L^2 / (8 (R_i + R_j))``, yet it touches the side at one point: one bond, as the
+    paper's Fig. 6 gives two only for a side against a side."""
+    from analysis.contacts import end_bond_counts
+    from analysis.geometry import end_bond_params
+
+    length = 1e-3  # alpha 0.001 at R = 0.5
+    scale = length**2 / 8.0  # the ends of i lie this much farther from j's tip
+    for overlap in (0.5 * scale, 3.0 * scale):
+        # rod j upright above the middle of rod i, its lower tip overlapping i
+        yj = 1.0 - overlap + 0.5 * length
+        x = np.array([[5.0, 5.0, 0.0], [5.0, 5.0 + yj, 0.0]])
+        u = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+        fr = frame_of(x, 0.5, [10.0, 10.0, 1.0], periodic=(True, True, False), axis=u,
+                      length=np.array([length, length]), dimension=2)
+        c = geometric_contacts(fr)
+        assert len(c.i) == 1
+        s, t = end_bond_params(x[1:] - x[:1], u[:1], [0.5 * length], u[1:],
+                               [0.5 * length])
+        r = x[1] - x[0] + t[0, :, None] * u[1] - s[0, :, None] * u[0]
+        both_ends_of_i = bool((np.linalg.norm(r[:2], axis=1) < 1.0).all())
+        assert both_ends_of_i == (overlap > scale)
+        assert end_bond_counts(fr, c).tolist() == [1], overlap
+
+
 def test_flat_side_fraction_counts_rods_touched_on_a_flat_side():
     """Rod 1 is touched on its flat side by a disk, rod 2 only on its cap by the same
     disk: one of the two rods has a flat-side contact."""

@@ -280,3 +280,28 @@ def test_a_fit_with_too_few_aspect_ratios_is_not_run():
     res["observable"] = "z_j_bonds"
     row = match(refs(fit_ref("z_j_bonds_fit_exponent", 0.68, 0.13)), runs, res).iloc[0]
     assert row.verdict == "not run" and "jamming_2d_paper has 3" in row.note
+
+
+def test_a_fit_over_the_papers_aspect_ratios_waits_for_all_of_them():
+    """With ``over`` the fit takes exactly those aspect ratios: one missing makes the row
+    ``not run`` (never a fit over the next larger alpha), and larger ones never enter."""
+    over = "0.001;0.003;0.01;0.03"
+    row = {**fit_ref("z_j_bonds_fit_exponent", 0.68, 0.13), "over": over}
+    runs, res = fit_data([0.001, 0.01, 0.03, 0.1, 0.5])
+    res["observable"] = "z_j_bonds"
+    out = match(refs(row), runs, res).iloc[0]
+    assert out.verdict == "not run" and "lacks 0.003" in out.note
+    runs, res = fit_data([0.5, 0.03, 0.01, 0.003, 0.001])
+    res["observable"] = "z_j_bonds"
+    out = match(refs(row), runs, res).iloc[0]
+    assert out.verdict == "agrees" and "fit over alpha = 0.001, 0.003, 0.01, 0.03" in out.note
+
+
+def test_a_fit_that_does_not_determine_its_parameter_is_unresolved():
+    """Points that a power law with an offset cannot pin down (one of them far off the
+    curve, one seed each) give an exponent with an error larger than itself: no verdict."""
+    runs, res = fit_data([0.001, 0.01, 0.03, 0.5], spread=0.0)
+    res["observable"] = "z_j_bonds"
+    res.loc[res["value"] == res["value"].min(), "value"] += 0.5  # alpha 0.001 off the law
+    out = match(refs(fit_ref("z_j_bonds_fit_exponent", 0.68, 0.13)), runs, res).iloc[0]
+    assert out.verdict == "unresolved" and "does not determine x" in out.note

@@ -112,6 +112,12 @@ def test_keep_carries_the_earlier_answers_that_these_results_do_not_give(tmp_pat
     earlier.loc[0, "runs"] = "tapping_x/an7"  # other runs of the study: both stand
     got, n = carry_forward(pd.read_csv(tmp_path / "new.csv"), earlier)
     assert n == 1 and list(got.runs) == ["tapping_x/an6", "tapping_x/an7", "elsewhere/an9"]
+    # a 'not run' over all the runs behind an old verdict stands: the rule or the
+    # reference changed (a fit that now waits for a point it used to do without)
+    earlier.loc[0, ["verdict", "runs"]] = ["agrees", "tapping_x/an6"]
+    got, n = carry_forward(pd.read_csv(tmp_path / "new.csv"), earlier)
+    assert n == 0 and list(got.verdict) == ["not run", "differs"]
+    assert list(got.runs) == ["tapping_x/an6", "elsewhere/an9"]
     assert main(["--references", str(refs), "--results", str(empty), "--out", str(out),
                  "--keep", str(tmp_path / "none.csv")]) == 2
 
