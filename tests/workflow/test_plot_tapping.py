@@ -133,3 +133,23 @@ def test_set_labels_name_a_changed_tangential_law_and_the_clip():
         "contact": {"tangential_spring": "keep"},
         "protocol": {"preparation": {"mode": "free", "ke_stop": 1e-8, "max_time": 2.0}}}))
     assert set_label(paper).endswith("\nspring kept, free settling")
+
+
+def test_snapshots_at_the_papers_taps_show_a_short_runs_last_frame_once(monkeypatch, tmp_path):
+    """The rule asks for taps 0, 300, 900 and the last (the paper's Figs. 4 and 5): a run
+    that stops earlier shows its last frame once, not once per tap past its end."""
+    from types import SimpleNamespace
+
+    from workflows.scripts import plot_tapping
+
+    d = fake_run(tmp_path, "an6", 1, 0.6, 70.0)  # taps 0-8 at steps 1000-1800
+    monkeypatch.setattr(plot_tapping, "read_particle_frames", lambda path: [
+        SimpleNamespace(step=1000 + 100 * k) for k in range(9)])
+    drawn = {}
+    monkeypatch.setattr(plot_tapping.plots, "tapping_snapshots",
+                        lambda frames, out, dc: drawn.update(frames=frames))
+    assert main(["--snapshots-out", str(tmp_path / "s.png"), str(d), "--taps", "0", "3",
+                 "300", "900", "-1"]) == 0
+    assert [t for t, _ in drawn["frames"]] == ["pysim, seed1, tap 0", "pysim, seed1, tap 3",
+                                               "pysim, seed1, tap 8"]
+    assert [f.step for _, f in drawn["frames"]] == [1000, 1300, 1800]

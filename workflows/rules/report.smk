@@ -355,7 +355,7 @@ rule plot_tapping_snapshots:
         dirs=lambda wc: " ".join(run_dirs(wc.study, wc.variant)),
     shell:
         "{PYTHON} -m workflows.scripts.plot_tapping --snapshots-out {output}"
-        " {params.dirs} --taps 0 -1 2> {log}"
+        " {params.dirs} --taps 0 300 900 -1 2> {log}"
 
 
 rule plot_packing:

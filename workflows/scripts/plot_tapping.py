@@ -140,10 +140,15 @@ def snapshots_figure(run_dirs, out: Path, taps: list[float]) -> int:
         dc = case["container"]["diameter"]
         cv = pd.read_csv(d / "curves.csv")
         parts = {f.step: f for f in read_particle_frames(d / "particles.dump")}
+        at = cv[cv.phase == 0] if (cv.phase == 0).any() else cv
+        shown = set()
         for tap in taps:
-            at = cv[cv.phase == 0] if (cv.phase == 0).any() else cv
             row = at.iloc[int(np.argmin(np.abs(at.tap.to_numpy() - min(tap, at.tap.max()))))]
-            frames.append((f"{d.name}, tap {row.tap:.0f}", parts[int(row.step)]))
+            if int(row.step) in shown:  # a tap past a short run's end: its last frame once
+                continue
+            shown.add(int(row.step))
+            frames.append((f"{d.name}, {d.parent.name}, tap {row.tap:.0f}",
+                           parts[int(row.step)]))
     if not frames:
         plots.message_figure(out, "no successful tapping run to draw: see failures.csv")
         return 0
