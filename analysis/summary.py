@@ -550,7 +550,8 @@ def analyse_tapping(run_dir, **plan):
     tap), ``phi_tapped`` and ``angle_tapped`` (means over the frames of the last tap, with
     their standard deviation as uncertainty), the changes ``phi_gain`` and
     ``angle_gain``, ``p2_z_tapped``, ``taps`` and the tapped angle per layer; and the late
-    state, ``phi_late``, ``angle_late`` (degrees), ``p2_z_late`` and ``angle_late_layer<k>``:
+    state, ``phi_late``, ``angle_late`` (degrees), ``p2_z_late``, ``angle_late_layer<k>`` and
+    ``phi_late_layer<k>`` (the slab density of the layer):
     means over the frames of the last eighth of the taps (:func:`late_window`), with the
     standard deviation over those frames as the uncertainty of the first two (a spread
     over taps, not a seed-to-seed error); and how the late taps shake the bed, from the
@@ -590,6 +591,8 @@ def analyse_tapping(run_dir, **plan):
     while f"angle_layer{k}" in curves:
         rows.append((f"angle_tapped_layer{k}", float(last_tap[f"angle_layer{k}"].mean()), np.nan))
         rows.append((f"angle_late_layer{k}", float(late[f"angle_layer{k}"].mean()), np.nan))
+        if f"phi_layer{k}" in curves:  # the paper monitors the density layer by layer too
+            rows.append((f"phi_late_layer{k}", float(late[f"phi_layer{k}"].mean()), np.nan))
         k += 1
     rows += tap_mark_rows(curves)
     thermo = run.thermo
