@@ -419,8 +419,8 @@ def tap_curves(run: RunData, start_step: int | None, dt: float, period: float,
     surface over ``pi D_c^2 / 4`` times that height), its moving average ``phi_avg`` over
     one oscillation, the surface height ``top``, the density of Pournin et al. (2005)
     ``phi_enclosing`` (grain volume of the bed over the enclosing truncated cylinder,
-    :class:`analysis.packing.EnclosingPackingFraction`) with the number of ``outliers``
-    it leaves out, the mean angle between spines and the base ``angle`` (degrees), order
+    :class:`analysis.packing.EnclosingPackingFraction`) with that cylinder's height
+    ``height_enclosing`` and the number of ``outliers`` it leaves out, the mean angle between spines and the base ``angle`` (degrees), order
     with respect to gravity ``p2_z`` and, for each of ``n_layers`` layers of
     ``layer_thickness`` stacked on the base, ``phi_layer<k>`` and ``angle_layer<k>``
     (grains assigned to layers by centre); every density and angle column also as
@@ -447,7 +447,8 @@ def tap_curves(run: RunData, start_step: int | None, dt: float, period: float,
         row = {"step": frame.step, "tap": t / period,
                "phase": int(round(t / period * frames_per_tap)) % frames_per_tap,
                "z_base": zb, "phi": fill.phi, "top": fill.top,
-               "phi_enclosing": enc.phi, "outliers": enc.outliers, "angle": ang.mean_deg,
+               "phi_enclosing": enc.phi, "height_enclosing": enc.height,
+               "outliers": enc.outliers, "angle": ang.mean_deg,
                "p2_z": NematicOrder().compute(frame).gravity_order, "n": len(frame.ids)}
         phil = slab_packing_fraction(frame, edges, area=area)
         for k in range(n_layers):
@@ -558,8 +559,9 @@ def analyse_tapping(run_dir, **plan):
     thermo rows of the same window (:func:`tap_cycle`, :func:`cycle_rows`); the state at
     the paper's tap counts (:func:`tap_mark_rows`). The density of Pournin et al. (2005)
     comes alongside: ``phi_settled_enclosing``, ``phi_tapped_enclosing`` and
-    ``phi_late_enclosing`` (``phi_enclosing`` of :func:`tap_curves`), and
-    ``outliers_late``, the mean number of grains it left out over the late window.
+    ``phi_late_enclosing`` (``phi_enclosing`` of :func:`tap_curves`), the enclosing
+    cylinder's late height ``height_late_enclosing`` (its spread over the frames as
+    uncertainty: how much the bed dilates at the frames' phase), and ``outliers_late``, the mean number of grains it left out over the late window.
     ``plan["start_step"]`` ``None``: tapping began at the first frame."""
     run = RunData(run_dir)
     curves = tap_curves(run, **plan)
@@ -586,6 +588,8 @@ def analyse_tapping(run_dir, **plan):
               float(last_tap.phi_enclosing.std(ddof=0))),
              ("phi_late_enclosing", float(late.phi_enclosing.mean()),
               float(late.phi_enclosing.std(ddof=0))),
+             ("height_late_enclosing", float(late.height_enclosing.mean()),
+              float(late.height_enclosing.std(ddof=0))),
              ("outliers_late", float(late.outliers.mean()), np.nan)]
     k = 1
     while f"angle_layer{k}" in curves:

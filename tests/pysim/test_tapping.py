@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from analysis.io import RunData
-from analysis.summary import analyse_tapping
+from analysis.summary import analyse_tapping, late_window
 from pysim.protocols.tapping import plan, settle_drag
 from pysim.simulation import ContactModel
 from tests.cases import TAP, TAP_D as D
@@ -111,10 +111,9 @@ def test_tapping_analysis_of_a_run(tapped):
     assert 0.25 < v["phi_settled_enclosing"] < 0.6 and 0.25 < v["phi_late_enclosing"] < 0.6
     assert v["phi_settled_enclosing"] == pytest.approx(curves.phi_enclosing.iloc[0])
     assert v["outliers_late"] >= 0
-    # the layers' densities: the late means of the per-frame slab densities
-    from analysis.summary import late_window
-
     late = late_window(curves)
+    assert v["height_late_enclosing"] == pytest.approx(late.height_enclosing.mean())
+    # the layers' densities: the late means of the per-frame slab densities
     for k in (1, 2):
         assert v[f"phi_late_layer{k}"] == pytest.approx(late[f"phi_layer{k}"].mean())
     assert 0.1 < v["phi_late_layer1"] < 0.75  # a few alpha = 2 rods in a narrow layer
