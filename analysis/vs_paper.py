@@ -20,7 +20,7 @@ reference row and engine:
   ours; ``unresolved`` when that error exceeds the size of the fitted quantity;
 * trend rows (``expect`` increasing, decreasing or constant along ``over``): ``agrees``
   when every step moves as stated by more than two combined standard errors (constant:
-  no step moves by more), ``differs`` when a step moves against it by more than that,
+  no two points differ by more), ``differs`` when a step moves against it by more than that,
   ``unresolved`` when the seeds cannot tell.
 
 A condition the run table has no column for is listed as unchecked in the ``note``; it
@@ -28,6 +28,7 @@ neither passes nor fails a row.
 """
 from __future__ import annotations
 
+import itertools
 import math
 import re
 from pathlib import Path
@@ -502,9 +503,13 @@ def _trend_rows(ref, runs, results) -> list[dict]:
 
 def _trend_verdict(points, expect: str) -> tuple[str, float]:
     """Verdict and the smallest step in combined standard errors (signed along the
-    expectation; for ``constant`` the largest |step|)."""
+    expectation; for ``constant`` the largest |difference| of any two points)."""
+    # constant: every pair of points (references/README.md), not only neighbours, so a
+    # scattered middle point cannot bridge two ends that differ
+    pairs = (list(itertools.combinations(points, 2)) if expect == "constant"
+             else list(zip(points, points[1:])))
     steps = []
-    for (_, m0, s0, _), (_, m1, s1, _) in zip(points, points[1:]):
+    for (_, m0, s0, _), (_, m1, s1, _) in pairs:
         u = math.hypot(s0 if np.isfinite(s0) else np.nan, s1 if np.isfinite(s1) else np.nan)
         steps.append((m1 - m0) / u if u > 0 else float("nan"))
     if any(not np.isfinite(s) for s in steps):

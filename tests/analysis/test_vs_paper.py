@@ -305,3 +305,12 @@ def test_a_fit_that_does_not_determine_its_parameter_is_unresolved():
     res.loc[res["value"] == res["value"].min(), "value"] += 0.5  # alpha 0.001 off the law
     out = match(refs(fit_ref("z_j_bonds_fit_exponent", 0.68, 0.13)), runs, res).iloc[0]
     assert out.verdict == "unresolved" and "does not determine x" in out.note
+
+
+def test_a_constant_trend_compares_every_pair_not_only_neighbours():
+    """A scattered middle point is within reach of both ends, which differ from each
+    other by far more than their errors: not constant."""
+    runs, res = trend_data({0.5: 0.80, 1.0: 0.85, 4.0: 0.90}, spread=0.001)
+    wide = res["case"] == "a1.0"
+    res.loc[wide, "value"] = res.loc[wide, "value"].to_numpy() + np.array([-0.2, 0.2])
+    assert match(refs(trend("constant")), runs, res).iloc[0].verdict == "differs"
