@@ -420,7 +420,8 @@ def tap_curves(run: RunData, start_step: int | None, dt: float, period: float,
     one oscillation, the surface height ``top``, the density of Pournin et al. (2005)
     ``phi_enclosing`` (grain volume of the bed over the enclosing truncated cylinder,
     :class:`analysis.packing.EnclosingPackingFraction`) with that cylinder's height
-    ``height_enclosing`` and the number of ``outliers`` it leaves out, the mean angle between spines and the base ``angle`` (degrees), order
+    ``height_enclosing`` and the number of ``outliers`` it leaves out, the mean angle
+    between spines and the base ``angle`` (degrees), order
     with respect to gravity ``p2_z`` and, for each of ``n_layers`` layers of
     ``layer_thickness`` stacked on the base, ``phi_layer<k>`` and ``angle_layer<k>``
     (grains assigned to layers by centre); every density and angle column also as
@@ -551,17 +552,18 @@ def analyse_tapping(run_dir, **plan):
     tap), ``phi_tapped`` and ``angle_tapped`` (means over the frames of the last tap, with
     their standard deviation as uncertainty), the changes ``phi_gain`` and
     ``angle_gain``, ``p2_z_tapped``, ``taps`` and the tapped angle per layer; and the late
-    state, ``phi_late``, ``angle_late`` (degrees), ``p2_z_late``, ``angle_late_layer<k>`` and
-    ``phi_late_layer<k>`` (the slab density of the layer):
-    means over the frames of the last eighth of the taps (:func:`late_window`), with the
-    standard deviation over those frames as the uncertainty of the first two (a spread
+    state, ``phi_late``, ``angle_late`` (degrees), ``p2_z_late``, ``angle_late_layer<k>``
+    and ``phi_late_layer<k>`` (the slab density of the layer): means over the frames of
+    the last eighth of the taps (:func:`late_window`), with the standard deviation over
+    those frames as the uncertainty of the first two (a spread
     over taps, not a seed-to-seed error); and how the late taps shake the bed, from the
     thermo rows of the same window (:func:`tap_cycle`, :func:`cycle_rows`); the state at
     the paper's tap counts (:func:`tap_mark_rows`). The density of Pournin et al. (2005)
     comes alongside: ``phi_settled_enclosing``, ``phi_tapped_enclosing`` and
     ``phi_late_enclosing`` (``phi_enclosing`` of :func:`tap_curves`), the enclosing
     cylinder's late height ``height_late_enclosing`` (its spread over the frames as
-    uncertainty: how much the bed dilates at the frames' phase), and ``outliers_late``, the mean number of grains it left out over the late window.
+    uncertainty: how much the bed dilates at the frames' phase), and ``outliers_late``,
+    the mean number of grains it left out over the late window.
     ``plan["start_step"]`` ``None``: tapping began at the first frame."""
     run = RunData(run_dir)
     curves = tap_curves(run, **plan)

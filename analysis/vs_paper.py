@@ -20,8 +20,8 @@ reference row and engine:
   ours; ``unresolved`` when that error exceeds the size of the fitted quantity;
 * trend rows (``expect`` increasing, decreasing or constant along ``over``): ``agrees``
   when every step moves as stated by more than two combined standard errors (constant:
-  no two points differ by more), ``differs`` when a step moves against it by more than that,
-  ``unresolved`` when the seeds cannot tell.
+  no two points differ by more), ``differs`` when a step moves against it by more than
+  that, ``unresolved`` when the seeds cannot tell.
 
 A condition the run table has no column for is listed as unchecked in the ``note``; it
 neither passes nor fails a row.
@@ -391,15 +391,15 @@ def _fit_rows(ref, runs, results) -> list[dict]:
     conds = _conditions(ref)
     groups = _engine_groups(_at_point(runs, ref, skip="alpha"), results, fitted,
                             by=["engine", "study"])
+    over = _over(ref)  # the paper's own points: a fit over others is a different fit
     out = []
     for (engine, study), g in groups.items():
         good, _, unchecked = _matching(g, conds, fitted)
         alphas = sorted(a for a in good["alpha"].astype(float).unique() if a > 0)
         row = {**base, "engine": engine, "runs": _runs_label(good) if len(good) else study,
                "note": f"unchecked: {', '.join(unchecked)}" if unchecked else ""}
-        if _over(ref):
-            # the paper's own points: a fit over others is a different fit
-            use = _over(ref)
+        if over:
+            use = over
             lack = [a for a in use if not np.isclose(alphas, a, rtol=RTOL, atol=0.0).any()]
             short = (f"the fit takes alpha = {'; '.join(f'{a:g}' for a in use)}, "
                      f"{study} lacks {'; '.join(f'{a:g}' for a in lack)}") if lack else ""
