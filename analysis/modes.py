@@ -179,32 +179,48 @@ def mode_table(omega2: np.ndarray, vecs: np.ndarray, dofs: np.ndarray,
             "parallel": ch[:, 1], "perpendicular": ch[:, 2]}
 
 
-def bands(omega2: np.ndarray, n_bands: int, zero: float) -> np.ndarray:
-    """Band of each mode (0 the lowest; -1 for zero and unstable modes,
-    ``omega^2 <= zero``): the other modes, ordered by frequency, split at the ``n_bands - 1`` widest gaps of
-    ``log omega``. Marschall & Teitel (2018, Sec. III.D) find two bands at alpha = 0.01
-    and three at alpha = 1 and 4, separated by gaps of decades."""
+def bands(omega2: np.ndarray, n_bands: int, zero: float, floor: bool = False) -> np.ndarray:
+    """Band of each mode (0 the lowest): the modes ordered by frequency, split at the
+    ``n_bands - 1`` widest gaps of ``log omega``. Marschall & Teitel (2018, Sec. III.D)
+    find two bands at alpha = 0.01 and three at alpha = 1 and 4, separated by gaps of
+    decades. Modes at or below ``zero`` (``omega^2 <= zero``: the translations and
+    modes within the eigensolver's resolution) have no measurable frequency: they are
+    band -1, or, with ``floor``, band 0, below ``n_bands - 1`` bands split among the
+    others. The paper's lowest band at alpha >= 1 (rods sliding along their spines,
+    ``omega ~ 1e-8`` at ``U/L^2 = 1e-15``) lies there; its three fractions sum to one,
+    so its lowest band holds the translations as well."""
     if n_bands < 1:
         raise ValueError(f"n_bands must be at least 1, got {n_bands}")
     omega2 = np.asarray(omega2, float)
-    out = np.full(omega2.shape, -1, np.int64)
+    out = np.full(omega2.shape, 0 if floor else -1, np.int64)
     live = np.flatnonzero(omega2 > zero)
-    if len(live) < n_bands:
-        raise ValueError(f"{len(live)} nonzero modes cannot form {n_bands} bands")
+    split = n_bands - 1 if floor else n_bands
+    if split == 0:
+        return out
+    if len(live) < split:
+        raise ValueError(f"{len(live)} nonzero modes cannot form {split} bands")
     order = live[np.argsort(omega2[live], kind="stable")]
     gaps = np.diff(np.log(omega2[order]))  # log omega^2 = 2 log omega: same order of gaps
-    cuts = np.sort(np.argsort(gaps, kind="stable")[::-1][: n_bands - 1]) + 1
-    out[order] = np.searchsorted(cuts, np.arange(len(order)), side="right")
+    cuts = np.sort(np.argsort(gaps, kind="stable")[::-1][: split - 1]) + 1
+    out[order] = np.searchsorted(cuts, np.arange(len(order)), side="right") + (1 if floor else 0)
     return out
 
 
-def band_means(omega2: np.ndarray, sizes, zero: float) -> np.ndarray:
-    """Mean frequency ``omega`` of consecutive groups of the nonzero modes
-    (``omega^2 > zero``) in ascending order, the first ``sizes[0]`` modes, the next
-    ``sizes[1]``, ...: the bands of a stable state followed to a compressed one, where
-    its gaps narrow and the bands merge (Marschall & Teitel 2018, Figs. 14, 18, 20)."""
-    omega = np.sqrt(np.sort(np.asarray(omega2, float)[np.asarray(omega2) > zero]))
+def band_means(omega2: np.ndarray, sizes, zero: float, skip: int = 0) -> np.ndarray:
+    """Mean frequency ``omega`` of consecutive groups of modes in ascending order of
+    ``omega^2``, after the lowest ``skip`` (the translations): the first ``sizes[0]``
+    modes, the next ``sizes[1]``, ...: the bands of a stable state followed to a
+    compressed one, where its gaps narrow and the bands merge (Marschall & Teitel 2018,
+    Figs. 14, 18, 20). A group with more than half its modes at or below ``zero``
+    (``omega^2 <= zero``, below the eigensolver's resolution) has no measured mean, nor has an empty group: NaN;
+    otherwise such modes count as ``omega = 0``."""
+    w2 = np.sort(np.asarray(omega2, float))[skip:]
     edges = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
-    if edges[-1] > len(omega) or np.any(np.diff(edges) <= 0):
-        raise ValueError(f"band sizes {list(sizes)} do not fit {len(omega)} nonzero modes")
-    return np.array([omega[a:b].mean() for a, b in zip(edges[:-1], edges[1:])])
+    if edges[-1] > len(w2) or np.any(np.diff(edges) < 0):
+        raise ValueError(f"band sizes {list(sizes)} do not fit {len(w2)} modes")
+    omega = np.where(w2 > zero, np.sqrt(np.abs(w2)), 0.0)
+    out = []
+    for a, b in zip(edges[:-1], edges[1:]):
+        resolved = int(np.sum(w2[a:b] > zero))
+        out.append(omega[a:b].mean() if b > a and 2 * resolved >= b - a else np.nan)
+    return np.array(out)

@@ -90,7 +90,8 @@ def reference_rows(case: dict, references, kind: str = "value", free=()) -> pd.D
 #: per-state columns of a study's ``modes.csv`` (workflows/scripts/modes.py) that
 #: reference rows name as observables
 MODE_OBSERVABLES = ("mode_fraction_low", "mode_fraction_middle", "mode_fraction_high",
-                    "omega_below_gap_exponent", "omega_low_exponent", "omega_middle_exponent")
+                    "omega_below_gap_exponent", "omega_low_exponent", "omega_middle_exponent",
+                    *(f"phi_minus_phi_j_u1e{k}" for k in (15, 14, 12, 11, 9)))
 
 
 def summary_rows(study: str, case, seed, observable, value,
@@ -102,9 +103,9 @@ def summary_rows(study: str, case, seed, observable, value,
 
 
 def mode_rows(study: str, path: Path) -> pd.DataFrame:
-    """The band fractions and frequency exponents of a study's ``modes.csv`` (one row per
-    pysim stable state) as ``summary.csv`` rows, without an uncertainty (one state each;
-    the seeds give the spread)."""
+    """The band fractions, frequency exponents and distances above jamming of a study's
+    ``modes.csv`` (one row per pysim stable state) as ``summary.csv`` rows, without an
+    uncertainty (one state each; the seeds give the spread)."""
     modes = pd.read_csv(path)
     long = modes.melt(id_vars=["variant", "seed"],
                       value_vars=[c for c in MODE_OBSERVABLES if c in modes],

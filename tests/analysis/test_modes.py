@@ -121,6 +121,22 @@ def test_bands_split_at_the_widest_gaps_of_log_omega():
     assert [np.sum(lone == k) for k in range(2)] == [40, 201]
 
 
+def test_a_floor_band_holds_the_modes_below_the_resolution():
+    rng = np.random.default_rng(4)
+    floor = np.concatenate([[0.0, 1e-17], rng.uniform(-1e-15, 1e-15, 30)])  # translations, noise
+    middle = 10 ** rng.uniform(-9.5, -9, 3)
+    high = 10 ** rng.uniform(-3, 0, 100)
+    w2 = rng.permutation(np.concatenate([floor, middle, high]))
+    three = modes.bands(w2, 3, 1e-12, floor=True)
+    # every mode has a band: the fractions sum to one, as the paper's do
+    assert [np.sum(three == k) for k in range(3)] == [32, 3, 100]
+    assert np.all(three[np.isin(w2, middle)] == 1)
+    # without the floor the noise is left out of every band
+    plain = modes.bands(w2, 3, 1e-12)
+    assert np.sum(plain == -1) == 32 and np.sum(plain >= 0) == 103
+    assert np.all(modes.bands(w2, 1, 1e-12, floor=True) == 0)
+
+
 def test_bands_refuse_more_bands_than_modes():
     with pytest.raises(ValueError, match="n_bands must be at least 1"):
         modes.bands(np.ones(3), 0, 1e-12)
@@ -130,8 +146,15 @@ def test_bands_refuse_more_bands_than_modes():
 
 def test_band_means_follow_the_stable_states_band_sizes():
     w2 = np.array([0.0, 1e-16, 4.0, 1e-4, 1e-2, 9.0, 4e-4, 1.0])
-    # nonzero in order: omega 1e-2, 2e-2, 0.1, 1, 2, 3
-    np.testing.assert_allclose(modes.band_means(w2, [2, 1], 1e-12), [0.015, 0.1])
-    np.testing.assert_allclose(modes.band_means(w2, [3, 3], 1e-12), [0.13 / 3, 2.0])
-    with pytest.raises(ValueError, match=r"band sizes \[4, 3\] do not fit 6 nonzero modes"):
-        modes.band_means(w2, [4, 3], 1e-12)
+    # after the two lowest (skipped): omega 1e-2, 2e-2, 0.1, 1, 2, 3
+    np.testing.assert_allclose(modes.band_means(w2, [2, 1], 1e-12, skip=2), [0.015, 0.1])
+    np.testing.assert_allclose(modes.band_means(w2, [3, 3], 1e-12, skip=2), [0.13 / 3, 2.0])
+    with pytest.raises(ValueError, match=r"band sizes \[4, 3\] do not fit 6 modes"):
+        modes.band_means(w2, [4, 3], 1e-12, skip=2)
+    # a group mostly below the resolution has no mean; one mostly above counts the
+    # unresolved modes as omega = 0; an empty group has none
+    means = modes.band_means(w2, [2, 3, 0], 1e-12)
+    assert np.isnan(means[0]) and np.isnan(means[2])
+    np.testing.assert_allclose(means[1], (1e-2 + 2e-2 + 0.1) / 3)
+    assert np.isnan(modes.band_means(w2, [3], 1e-12)[0])
+    np.testing.assert_allclose(modes.band_means(w2, [4], 1e-12), [0.03 / 4])

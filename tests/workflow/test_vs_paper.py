@@ -156,11 +156,14 @@ def test_band_fractions_of_modes_csv_join_the_runs(tmp_path):
     pd.DataFrame(rows).to_csv(root / "summary.csv", index=False)
     pd.DataFrame({"variant": ["alpha4", "alpha4"], "seed": ["seed1", "seed2"],
                   "mode_fraction_low": [0.06, 0.07], "mode_fraction_middle": [0.001, 0.0],
-                  "mode_fraction_high": [0.939, 0.93], "bonds": [2800, 2790]}
+                  "mode_fraction_high": [0.939, 0.93], "bonds": [2800, 2790],
+                  "phi_minus_phi_j_u1e9": [4e-4, 5e-4]}
                  ).to_csv(root / "j2d" / "modes.csv", index=False)
     runs, results = run_table([root])
     low = results[results.observable == "mode_fraction_low"].sort_values("seed")
     assert list(low.seed) == [1, 2] and list(low.value) == [0.06, 0.07]
+    far = results[results.observable == "phi_minus_phi_j_u1e9"].sort_values("seed")
+    assert list(far.value) == [4e-4, 5e-4]
     assert set(low.engine) == {"pysim"} and set(low.case) == {"alpha4"}
     assert "bonds" not in set(results.observable)
     assert len(runs) == 2

@@ -136,9 +136,21 @@ rule plot_angles:
         "{PYTHON} -m workflows.scripts.plot_angles --runs {params.runs} --out {output} 2> {log}"
 
 
+def modes_run_dirs(study):
+    """pysim run directories of the study's variants that get vibrational modes
+    (``analysis.modes_variants``; every variant without it)."""
+    chosen = CFG["studies"][study].get("analysis", {}).get("modes_variants")
+    known = {v for s, v in study_variants() if s == study}
+    if chosen is not None and set(chosen) - known:
+        raise ValueError(f"study {study}: analysis.modes_variants names "
+                         f"{sorted(set(chosen) - known)}, not among its variants {sorted(known)}")
+    return [d for d in run_dirs(study) if d.endswith("/pysim")
+            and (chosen is None or d.split("/")[-3] in chosen)]
+
+
 rule plot_modes:
     input:
-        lambda wc: [f"{d}/run.json" for d in run_dirs(wc.study) if d.endswith("/pysim")],
+        lambda wc: [f"{d}/run.json" for d in modes_run_dirs(wc.study)],
     output:
         figure=report(
             f"{RESULTS}/{{study}}/figures/modes.png",
@@ -149,7 +161,7 @@ rule plot_modes:
     log:
         f"{RESULTS}/{{study}}/figures/modes.log",
     params:
-        runs=lambda wc: " ".join(d for d in run_dirs(wc.study) if d.endswith("/pysim")),
+        runs=lambda wc: " ".join(modes_run_dirs(wc.study)),
     shell:
         "{PYTHON} -m workflows.scripts.modes --runs {params.runs} --out {output.figure}"
         " --table {output.table} 2> {log}"

@@ -118,7 +118,10 @@ def compressed_state(run_dir: Path, target: float, rtol: float = 0.25, tries: in
         _relax(sim, case)
         return case, sim, step, jammed.energy_density(sim, float(2 * sim.state.radius.min()))
 
-    points = [(0.0, np.sqrt(trial(0.0)[3]))]
+    start = trial(0.0)
+    if abs(start[3] / target - 1.0) <= rtol:
+        return start[:3]
+    points = [(0.0, np.sqrt(start[3]))]
     strain, energy = 1e-6, None
     for _ in range(tries):
         case, sim, step, energy = trial(strain)
@@ -176,14 +179,18 @@ def modes_of(sim, case: dict, step: int, metric: str = "paper") -> tuple[pd.Data
     bonds = (end_bond_counts(fr, ct.subset(backbone)).sum() if end_bonds
              else int(backbone.sum()))
     two = am.bands(w2, 2, ZERO * top)
-    three = am.bands(w2, 3, ZERO * top)
+    # the paper's lowest band at alpha >= 1 lies below the eigensolver's resolution
+    three = am.bands(w2, 3, ZERO * top, floor=True)
+    translations = int(np.sum(fr.periodic[:2]))
     summary = {"n_particles": int(keep.sum()), "n_dof": len(dof), "n_pairs": len(pairs),
                "zero_modes": int(_zero(w2, top).sum()),
                "zero_modes_stiffness": int(_zero(wk2, top).sum()),
                "negative_modes": int(np.sum(w2 < -ZERO * top)),
                # the paper's count: N z/2 modes above the gap, one per bond
                "bonds": int(bonds), "modes_above_gap": int(np.sum(two == 1)),
-               **dict(zip(BAND_FREQUENCIES, band_frequencies(w2, band_sizes(w2)))),
+               "translations": translations,
+               **dict(zip(BAND_FREQUENCIES,
+                          band_frequencies(w2, band_sizes(w2, translations), translations))),
                **{f"mode_fraction_{name}": float(np.mean(three == k))
                   for k, name in enumerate(("low", "middle", "high"))},
                "stress_over_stiffness": float(np.abs(hs).max() / np.abs(hk).max()),
@@ -192,28 +199,33 @@ def modes_of(sim, case: dict, step: int, metric: str = "paper") -> tuple[pd.Data
     return table, summary
 
 
-#: U/L^2 of the states above jamming for the scaling of the band frequencies (beside
-#: the stable state's, near 1e-15): within the paper's ranges (Figs. 14, 18, 20)
-ENERGIES = (1e-14, 1e-12)
+#: U/L^2 of the states above jamming for the scaling of the band frequencies and for
+#: ``phi - phi_J`` (beside the stable state's, near 1e-15): the paper's (Figs. 14, 18)
+ENERGIES = (1e-15, 1e-14, 1e-12, 1e-11, 1e-9)
 
 
 #: the band frequencies of a state's row, in the order of :func:`band_sizes`
 BAND_FREQUENCIES = ("omega_below_gap", "omega_low", "omega_middle")
 
 
-def band_sizes(omega2: np.ndarray) -> list[int]:
-    """Sizes of a stable state's bands, to follow up its energy ladder: the modes below
-    the widest gap, then the low and middle bands of the three-band split."""
+def band_sizes(omega2: np.ndarray, translations: int) -> list[int]:
+    """Sizes of a stable state's bands, the ``translations`` left out, to follow up its
+    energy ladder by rank: the modes below the widest gap (those below the resolution
+    with them), then the low band of the three-band split (the modes below the
+    resolution) and its middle band."""
     zero = ZERO * float(np.abs(omega2).max())
-    two, three = am.bands(omega2, 2, zero), am.bands(omega2, 3, zero)
-    return [int((two == 0).sum()), int((three == 0).sum()), int((three == 1).sum())]
+    two, three = am.bands(omega2, 2, zero), am.bands(omega2, 3, zero, floor=True)
+    floor = int(np.sum(omega2 <= zero)) - translations
+    return [floor + int((two == 0).sum()), floor, int((three == 1).sum())]
 
 
-def band_frequencies(omega2: np.ndarray, sizes) -> list[float]:
+def band_frequencies(omega2: np.ndarray, sizes, translations: int) -> list[float]:
     """Mean frequencies of the bands of :func:`band_sizes` in a state's spectrum
-    (:func:`analysis.modes.band_means`): below the gap, low, middle."""
+    (:func:`analysis.modes.band_means`; NaN for a band mostly below the resolution):
+    below the gap, low, middle."""
     zero = ZERO * float(np.abs(omega2).max())
-    return [*am.band_means(omega2, sizes[:1], zero), *am.band_means(omega2, sizes[1:], zero)]
+    return [*am.band_means(omega2, sizes[:1], zero, translations),
+            *am.band_means(omega2, sizes[1:], zero, translations)]
 
 
 def _write_csv(df: pd.DataFrame, path: Path, **kw) -> None:
@@ -229,10 +241,43 @@ def frequency_exponents(energies, means: np.ndarray) -> dict:
     stable state and its compressions: ``energies`` (one per state) and ``means`` (state
     by band: below the widest gap, then the low and middle bands of the three-band split,
     each followed by its size in the stable state, :func:`analysis.modes.band_means`):
-    ``omega_below_gap_exponent``, ``omega_low_exponent``, ``omega_middle_exponent``."""
+    ``omega_below_gap_exponent``, ``omega_low_exponent``, ``omega_middle_exponent``.
+    States where a band has no measured mean (NaN) are left out of its fit; with fewer
+    than two left the exponent is NaN."""
     log_u = np.log(np.asarray(energies, float))
-    return {f"{name}_exponent": float(np.polyfit(log_u, np.log(means[:, k]), 1)[0])
-            for k, name in enumerate(BAND_FREQUENCIES)}
+    out = {}
+    for k, name in enumerate(BAND_FREQUENCIES):
+        ok = np.isfinite(means[:, k]) & (means[:, k] > 0)
+        out[f"{name}_exponent"] = (float(np.polyfit(log_u[ok], np.log(means[ok, k]), 1)[0])
+                                   if ok.sum() >= 2 else np.nan)
+    return out
+
+
+#: the ladder's rungs up to this ``U/L^2`` fix ``phi_J`` (:func:`distance_to_jamming`); the
+#: paper's own ``phi - phi_J`` at 1e-9 (alpha = 4) already lies off ``U ~ (phi - phi_J)^2``
+LINEAR_UP_TO = 1e-12
+
+
+def distance_to_jamming(energies, phis) -> np.ndarray:
+    """``phi - phi_J`` of each state of an energy ladder, with ``phi_J`` where the
+    least-squares line ``sqrt(U/L^2) = c (phi - phi_J)`` through the states with
+    ``U/L^2 <= LINEAR_UP_TO`` (the two of lowest energy if fewer lie there) meets zero
+    (harmonic law: ``U ~ (phi - phi_J)^2``). All NaN with fewer than two states or
+    no spread in their ``phi``."""
+    u, phi = np.asarray(energies, float), np.asarray(phis, float)
+    ok = u <= LINEAR_UP_TO
+    if ok.sum() < 2:
+        ok = np.isin(np.arange(len(u)), np.argsort(u)[:2])
+    if ok.sum() < 2 or np.ptp(phi[ok]) == 0:
+        return np.full(len(phi), np.nan)
+    c, b = np.polyfit(phi[ok], np.sqrt(u[ok]), 1)
+    return phi + b / c
+
+
+def energy_tag(u: float) -> str:
+    """``1e-15`` -> ``u1e15``: the suffix of a ladder rung's ``phi_minus_phi_j_<tag>``."""
+    mantissa, exponent = f"{u:.0e}".split("e")
+    return f"u{mantissa}e{-int(exponent)}"
 
 
 def plot_modes(tables: dict, out: Path, ladder: dict | None = None) -> None:
@@ -336,9 +381,16 @@ def main(argv=None) -> int:
             states.append(above)
         # up the ladder the gaps narrow and move: every rung's band frequencies follow
         # the stable state's bands by rank, one definition for the table and the fit
-        sizes = band_sizes(table.omega2.to_numpy())
+        sizes = band_sizes(table.omega2.to_numpy(), summary["translations"])
         for t, r in zip(states, steps):
-            r.update(zip(BAND_FREQUENCIES, band_frequencies(t.omega2.to_numpy(), sizes)))
+            r.update(zip(BAND_FREQUENCIES, band_frequencies(t.omega2.to_numpy(), sizes,
+                                                            summary["translations"])))
+        distance = distance_to_jamming([r["energy_density"] for r in steps],
+                                       [r["phi"] for r in steps])
+        for target, r, d in zip([None, *a.energies], steps, distance):
+            r["phi_minus_phi_j"] = float(d)
+            if target is not None:  # the rung asked for this U/L^2 (within 25 %)
+                summary[f"phi_minus_phi_j_{energy_tag(target)}"] = float(d)
         if len(steps) > 2:
             summary.update(frequency_exponents(
                 [r["energy_density"] for r in steps],
