@@ -148,6 +148,13 @@ def modes_run_dirs(study):
             and (chosen is None or d.split("/")[-3] in chosen)]
 
 
+def modes_energies(study):
+    """``--energies ...`` of the study's ``analysis.modes_energies``, or nothing (the
+    script's default)."""
+    energies = CFG["studies"][study].get("analysis", {}).get("modes_energies")
+    return "" if energies is None else "--energies " + " ".join(f"{u:g}" for u in energies)
+
+
 rule plot_modes:
     input:
         lambda wc: [f"{d}/run.json" for d in modes_run_dirs(wc.study)],
@@ -162,9 +169,10 @@ rule plot_modes:
         f"{RESULTS}/{{study}}/figures/modes.log",
     params:
         runs=lambda wc: " ".join(modes_run_dirs(wc.study)),
+        energies=lambda wc: modes_energies(wc.study),
     shell:
         "{PYTHON} -m workflows.scripts.modes --runs {params.runs} --out {output.figure}"
-        " --table {output.table} 2> {log}"
+        " --table {output.table} {params.energies} 2> {log}"
 
 
 rule plot_order:
