@@ -284,6 +284,15 @@ def _engine_groups(runs: pd.DataFrame, results: pd.DataFrame, observable: str,
     return {k: g for k, g in joined.groupby(list(by), sort=True)}
 
 
+def _unmeasured(runs: pd.DataFrame, results: pd.DataFrame, observable: str) -> pd.DataFrame:
+    """The run rows of ``runs`` whose value of ``observable`` is NaN: reported, but
+    not measurable in them (a band of modes below the resolution, say)."""
+    res = results[results["observable"] == observable][["study", "case", "engine", "seed",
+                                                         "value"]]
+    joined = runs.merge(res, on=["study", "case", "engine", "seed"], how="inner")
+    return joined[~np.isfinite(joined["value"].astype(float))]
+
+
 def _base_row(ref) -> dict:
     row = {c: getattr(ref, c) for c in ("id", "paper", "where", "study", "kind", *POINT,
                                          "layer", *CONDITION_COLUMNS, "uncertainty_kind",
@@ -315,8 +324,13 @@ def _runs_label(g: pd.DataFrame) -> str:
 def _value_rows(ref, runs, results) -> list[dict]:
     obs = observable_name(ref)
     base = _base_row(ref)
-    groups = _engine_groups(_at_point(runs, ref), results, obs)
+    at = _at_point(runs, ref)
+    groups = _engine_groups(at, results, obs)
     if not groups:
+        blank = _unmeasured(at, results, obs)
+        if len(blank):  # the runs are back, and have no value to give (NaN)
+            return [{**base, "engine": "", "verdict": "not run", "runs": _runs_label(blank),
+                     "note": f"the runs report {obs} as not measured (NaN)"}]
         return [{**base, "engine": "", "verdict": "not run",
                  "note": "" if obs in set(results["observable"]) or not len(results)
                  else f"no run reports {obs}"}]

@@ -77,6 +77,17 @@ def test_an_observable_no_run_reports_is_not_run_with_a_note():
     assert r.verdict == "not run" and "flat_fraction" in r.note
 
 
+def test_a_value_the_runs_report_as_not_measured_is_not_run_with_those_runs():
+    runs, res = runs_and_results([np.nan, np.nan], observable="omega_low_exponent")
+    r = match(refs(ref(observable="omega_low_exponent")), runs, res).iloc[0]
+    assert r.verdict == "not run" and r.runs == "jamming_2d_paper/a1"
+    assert "not measured" in r.note
+    # one seed with a value: that seed is the measurement
+    runs, res = runs_and_results([np.nan, 0.88], observable="omega_low_exponent")
+    r = match(refs(ref(observable="omega_low_exponent")), runs, res).iloc[0]
+    assert r.n_seeds == 1 and math.isclose(r.ours, 0.88)
+
+
 def test_inequality_conditions_and_unchecked_keys():
     runs, res = runs_and_results([0.88, 0.88], rate=1e-8)
     r = match(refs(ref(conditions="dimension=2; rate<=1e-9; side_contacts=two_bonds")),
