@@ -140,6 +140,11 @@ def validate_config(config: dict, source: str = "config") -> dict:
                 raise ConfigError(f"{source}: studies.{name}.engine_seeds.{engine} = {seeds} has "
                                   f"seeds {extra} that are not in studies.{name}.seeds = "
                                   f"{study['seeds']}; use a subset of them")
+        unknown = sorted(set(study.get("analysis", {}).get("modes_variants", []))
+                         - set(variants))
+        if unknown:
+            raise ConfigError(f"{source}: studies.{name}.analysis.modes_variants names "
+                              f"{unknown}, not among the study's variants {sorted(variants)}")
         for vname, override in variants.items():
             merged = deep_merge(study["case"], override)
             for seed in study["seeds"]:

@@ -183,7 +183,13 @@ CONFIG_CASES = [
      "studies.s.analysis.c_min = 2.5 is not allowed; use a value of type integer"),
     ({"studies": {"s": {"engines": ["pysim"], "seeds": [1], "case": {},
                         "analysis": {"cmin": 3}}}},
-     "unknown key 'studies.s.analysis.cmin'; allowed here: c_min, jamming_window"),
+     "unknown key 'studies.s.analysis.cmin'; allowed here: c_min, jamming_window, "
+     "modes_energies, modes_variants"),
+    ({"studies": {"s": {"engines": ["pysim"], "seeds": [1], "case": {},
+                        "variants": {"a1": {}, "a4": {}},
+                        "analysis": {"modes_variants": ["a1", "a2"]}}}},
+     "studies.s.analysis.modes_variants names ['a2'], not among the study's variants "
+     "['a1', 'a4']"),
     ({"studies": {"s": {"engines": ["pysim"], "seeds": [1], "case": {},
                         "analysis": {"jamming_window": [float("nan"), 1e-2]}}}},
      "studies.s.analysis.jamming_window.0 = nan is not allowed; use a finite number > 0"),
