@@ -212,8 +212,8 @@ def band_means(omega2: np.ndarray, sizes, zero: float, skip: int = 0) -> np.ndar
     modes, the next ``sizes[1]``, ...: the bands of a stable state followed to a
     compressed one, where its gaps narrow and the bands merge (Marschall & Teitel 2018,
     Figs. 14, 18, 20). A group with more than half its modes at or below ``zero``
-    (``omega^2 <= zero``, below the eigensolver's resolution) has no measured mean, nor has an empty group: NaN;
-    otherwise such modes count as ``omega = 0``."""
+    (``omega^2 <= zero``, below the eigensolver's resolution) has no measured mean, nor
+    has an empty group: NaN; otherwise such modes count as ``omega = 0``."""
     w2 = np.sort(np.asarray(omega2, float))[skip:]
     edges = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
     if edges[-1] > len(w2) or np.any(np.diff(edges) < 0):

@@ -277,19 +277,23 @@ def _engine_groups(runs: pd.DataFrame, results: pd.DataFrame, observable: str,
                    by=SAME_RUN) -> dict:
     """The run rows of ``runs`` joined with their value of ``observable``, grouped by the
     columns ``by`` (keys: tuples of their values)."""
-    res = results[results["observable"] == observable][
-        ["study", "case", "engine", "seed", "value", "uncertainty"]]
-    joined = runs.merge(res, on=["study", "case", "engine", "seed"], how="inner")
+    joined = _joined(runs, results, observable)
     joined = joined[np.isfinite(joined["value"].astype(float))]
     return {k: g for k, g in joined.groupby(list(by), sort=True)}
+
+
+def _joined(runs: pd.DataFrame, results: pd.DataFrame, observable: str) -> pd.DataFrame:
+    """The run rows of ``runs`` with their ``value`` and ``uncertainty`` of
+    ``observable`` (runs without it left out)."""
+    res = results[results["observable"] == observable][
+        ["study", "case", "engine", "seed", "value", "uncertainty"]]
+    return runs.merge(res, on=["study", "case", "engine", "seed"], how="inner")
 
 
 def _unmeasured(runs: pd.DataFrame, results: pd.DataFrame, observable: str) -> pd.DataFrame:
     """The run rows of ``runs`` whose value of ``observable`` is NaN: reported, but
     not measurable in them (a band of modes below the resolution, say)."""
-    res = results[results["observable"] == observable][["study", "case", "engine", "seed",
-                                                         "value"]]
-    joined = runs.merge(res, on=["study", "case", "engine", "seed"], how="inner")
+    joined = _joined(runs, results, observable)
     return joined[~np.isfinite(joined["value"].astype(float))]
 
 

@@ -139,9 +139,8 @@ rule plot_angles:
 def modes_run_dirs(study):
     """pysim run directories of the study's variants that get vibrational modes
     (``analysis.modes_variants``; every variant without it)."""
-    chosen = CFG["studies"][study].get("analysis", {}).get("modes_variants")
-    return [d for d in run_dirs(study) if d.endswith("/pysim")
-            and (chosen is None or d.split("/")[-3] in chosen)]
+    chosen = CFG["studies"][study].get("analysis", {}).get("modes_variants") or [None]
+    return [d for v in chosen for d in run_dirs(study, v) if d.endswith("/pysim")]
 
 
 def modes_energies(study):

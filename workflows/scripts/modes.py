@@ -37,6 +37,9 @@ from rodcase.case import load_case
 #: the translations near 1e-16 of it; the softest stress-stabilised rod modes lie near 1e-9)
 ZERO = 1e-12
 
+#: how close to its ``U/L^2`` a rung of the energy ladder must come (relative)
+RUNG_RTOL = 0.25
+
 
 def _frame_contacts(sim, step: int) -> tuple[Frame, Contacts]:
     s = sim.state
@@ -103,7 +106,7 @@ def stable_state_modes(run_dir: Path, metric: str = "paper") -> tuple[pd.DataFra
     return table, {**summary, "exact": exact}
 
 
-def compressed_state(run_dir: Path, target: float, rtol: float = 0.25, tries: int = 8):
+def compressed_state(run_dir: Path, target: float, rtol: float = RUNG_RTOL, tries: int = 8):
     """The stable state of ``run_dir`` compressed affinely above jamming and relaxed,
     until its ``U/L^2`` lies within ``rtol`` of ``target``: ``(case, sim, step)``. Each
     trial starts again from the stable state (one basin); the strains follow by the
@@ -206,7 +209,8 @@ def modes_of(sim, case: dict, step: int, metric: str = "paper") -> tuple[pd.Data
 ENERGIES = (1e-14, 1e-12)
 
 #: the stable states' U/L^2 (the paper's U_0, that of the ``jammed`` protocol): a stable
-#: state within 25 % of it reports ``phi_minus_phi_j_u1e15`` without a compression
+#: state within :data:`RUNG_RTOL` of it reports ``phi_minus_phi_j_u1e15`` without a
+#: compression
 STABLE_ENERGY = 1e-15
 
 
@@ -393,11 +397,11 @@ def main(argv=None) -> int:
                                                             summary["translations"])))
         distance = distance_to_jamming([r["energy_density"] for r in steps],
                                        [r["phi"] for r in steps])
-        stable = (STABLE_ENERGY if abs(summary["energy_density"] / STABLE_ENERGY - 1) <= 0.25
-                  else None)
+        stable = (STABLE_ENERGY
+                  if abs(summary["energy_density"] / STABLE_ENERGY - 1) <= RUNG_RTOL else None)
         for target, r, d in zip([stable, *a.energies], steps, distance):
             r["phi_minus_phi_j"] = float(d)
-            if target is not None:  # the rung is at this U/L^2 (within 25 %)
+            if target is not None:  # the rung is at this U/L^2 (within RUNG_RTOL)
                 summary[f"phi_minus_phi_j_{energy_tag(target)}"] = float(d)
         if len(steps) > 2:
             summary.update(frequency_exponents(
