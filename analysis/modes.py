@@ -48,9 +48,11 @@ def dofs(frame: Frame, keep: np.ndarray | None = None) -> np.ndarray:
     return np.array(rows, dtype=np.int64).reshape(-1, 2)
 
 
-def _bonds(frame: Frame, i: int, j: int, end_bonds: bool):
+def _bonds(frame: Frame, i: int, j: int, end_bonds: bool, distinct: bool = False):
     """The bonds of pair ``(i, j)``: tuples ``(s, t, sliding)`` with ``sliding`` 0 (none),
-    1 (``s`` inside spine i) or 2 (``t`` inside spine j)."""
+    1 (``s`` inside spine i) or 2 (``t`` inside spine j). ``distinct``: a bond joining the
+    same two spine points as an earlier one is left out (``spine_contact:
+    end_bonds_distinct``, :func:`pysim.contacts.kinematics.repeats_bond`)."""
     hi, hj = 0.5 * frame.length[i], 0.5 * frame.length[j]
     if not end_bonds:
         if hi > 0 or hj > 0:
@@ -62,20 +64,26 @@ def _bonds(frame: Frame, i: int, j: int, end_bonds: bool):
 
     d = frame.minimum_image(frame.x[j] - frame.x[i])
     s, t = end_bond_params(d, frame.axis[i], hi, frame.axis[j], hj)
+    s, t = s[0], t[0]
+    keep = [k for k in range(4)
+            if not (distinct and any(s[m] == s[k] and t[m] == t[k] for m in range(k)))]
     # a closest point inside its spine slides with the packing (2: on j, 1: on i)
-    return [(float(s[0, k]), float(t[0, k]),
-             (2 if abs(t[0, k]) < hj else 0) if k < 2 else (1 if abs(s[0, k]) < hi else 0))
-            for k in range(4)]
+    return [(float(s[k]), float(t[k]),
+             (2 if abs(t[k]) < hj else 0) if k < 2 else (1 if abs(s[k]) < hi else 0))
+            for k in keep]
 
 
 def hessian_parts(frame: Frame, pairs: np.ndarray, dof: np.ndarray, k_n: float = 1.0,
-                  end_bonds: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                  end_bonds: bool = True, distinct: bool = False
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(H_k, H_s, grad U)`` of the harmonic bonds of the touching ``pairs`` (rows of
     particle-row pairs; pairs that do not touch add nothing): the stiffness and stress
     parts of the Hessian over ``dof`` and the energy gradient (minus the generalised forces
     ``F_x, F_y, tau_z``), in units of ``k_n`` / length^2, ``k_n`` / length. ``end_bonds``:
     whether pairs touch through the four end bonds, as pysim's pairs do under
-    ``spine_contact: end_bonds`` in a packing with rods (then every pair, disks too)."""
+    ``spine_contact: end_bonds`` in a packing with rods (then every pair, disks too);
+    ``distinct``: a bond that joins the same two points as another counts once
+    (``spine_contact: end_bonds_distinct``)."""
     col = np.full((frame.n, 3), -1, dtype=np.int64)
     col[dof[:, 0], dof[:, 1]] = np.arange(len(dof))
     hk = np.zeros((len(dof), len(dof)))
@@ -87,7 +95,7 @@ def hessian_parts(frame: Frame, pairs: np.ndarray, dof: np.ndarray, k_n: float =
         rsum = frame.radius[i] + frame.radius[j]
         local = np.array([col[i, 0], col[i, 1], col[i, 2], col[j, 0], col[j, 1], col[j, 2]])
         ok = np.flatnonzero(local >= 0)
-        for s, t, sliding in _bonds(frame, i, j, end_bonds):
+        for s, t, sliding in _bonds(frame, i, j, end_bonds, distinct):
             r = dsep + t * uj - s * ui
             dist = float(np.hypot(r[0], r[1]))
             delta = rsum - dist

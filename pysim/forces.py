@@ -49,18 +49,23 @@ NO_TENSION = 8
 #: bit added to a law id: the tangential spring is not reset at the Coulomb cap
 KEEP_SPRING = 16
 
-# indices into the contact parameter array (END_BONDS: 1.0 selects the end-bond geometry
-# of rod pairs, pysim.contacts.end_bond)
+# indices into the contact parameter array (END_BONDS: the spine contact of rod pairs,
+# SPINE_CONTACTS: 0 the closest points, 1 the four end bonds of pysim.contacts.end_bond,
+# 2 those end bonds that are distinct, pysim.contacts.repeats_bond)
 K_N, GAMMA_N, K_T, GAMMA_T, MU, F_COH, D_COH, END_BONDS = range(8)
 N_PARAMS = 8
+SPINE_CONTACTS = {"closest": 0.0, "end_bonds": 1.0, "end_bonds_distinct": 2.0}
+#: the value of ``p[END_BONDS]`` that leaves out repeated end bonds
+DISTINCT_BONDS = SPINE_CONTACTS["end_bonds_distinct"]
 
 
 def contact_params(k_n, gamma_n=0.0, k_t=0.0, gamma_t=0.0, mu=0.0, f_coh=0.0, d_coh=0.0,
                    end_bonds=False):
-    """Pack contact parameters in the order of the index constants."""
+    """Pack contact parameters in the order of the index constants; ``end_bonds`` a
+    value of :data:`SPINE_CONTACTS` (True: all four end bonds)."""
     p = np.zeros(N_PARAMS)
     p[[K_N, GAMMA_N, K_T, GAMMA_T, MU, F_COH, D_COH, END_BONDS]] = [
-        k_n, gamma_n, k_t, gamma_t, mu, f_coh, d_coh, 1.0 if end_bonds else 0.0]
+        k_n, gamma_n, k_t, gamma_t, mu, f_coh, d_coh, float(end_bonds)]
     return p
 
 

@@ -23,7 +23,8 @@ import numpy as np
 
 from pysim import integrators as itg
 from pysim.contacts import PAIR_SCRATCH, REC_COLUMNS, pair_forces, worst_overlap
-from pysim.forces import END_BONDS, KEEP_SPRING, LAW_IDS, NO_TENSION, contact_params
+from pysim.forces import (END_BONDS, KEEP_SPRING, LAW_IDS, NO_TENSION, SPINE_CONTACTS,
+                          contact_params)
 from pysim.jit import get_threads
 from pysim.neighbors import row_starts, transpose
 from pysim.records import WORST_UNKNOWN, new_cache, new_params
@@ -48,7 +49,10 @@ class ContactModel:
       points of the spines) or ``"end_bonds"`` (frictionless, cohesionless 2-D rods: one
       bond from each spine end to the other spine, :func:`pysim.contacts.end_bond`; a
       smooth energy where the closest-point law has a kink at parallel side contacts;
-      :class:`Simulation` refuses it for a 3-D state, :meth:`check_dimension`).
+      :class:`Simulation` refuses it for a 3-D state, :meth:`check_dimension`), or
+      ``"end_bonds_distinct"``: the same, a bond that joins the same two points as
+      another counted once (:func:`pysim.contacts.kinematics.repeats_bond`), so a tip-tip
+      contact is one bond and a side-side contact two, as in Marschall & Teitel (2018).
     * every parameter is a finite number (NaN would pass a ``>= 0`` test and run).
     * ``limit_damping``: clip every contact's normal force (grains and walls) at zero, so
       that the damping never pulls (LAMMPS' ``limit_damping``); off by default, as in
@@ -77,9 +81,9 @@ class ContactModel:
     def __post_init__(self):
         if self.law not in LAW_IDS:
             raise ValueError(f"unknown contact law {self.law!r}; valid: {sorted(LAW_IDS)}")
-        if self.spine_contact not in ("closest", "end_bonds"):
+        if self.spine_contact not in SPINE_CONTACTS:
             raise ValueError(f"unknown spine_contact {self.spine_contact!r}; valid: "
-                             "'closest', 'end_bonds'")
+                             + ", ".join(repr(k) for k in SPINE_CONTACTS))
         if self.tangential_spring not in ("reset", "keep"):
             raise ValueError(f"unknown tangential_spring {self.tangential_spring!r}; valid: "
                              "'reset', 'keep'")
@@ -90,19 +94,19 @@ class ContactModel:
             value = getattr(self, name)
             if value is not None and not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} = {value} is not allowed; use a finite number >= 0")
-        if self.spine_contact == "end_bonds" and (self.mu > 0 or self.f_coh > 0):
-            raise ValueError("spine_contact 'end_bonds' is frictionless and cohesionless "
-                             f"(got mu = {self.mu}, f_coh = {self.f_coh}); use mu = 0 and "
-                             "f_coh = 0, or spine_contact 'closest'")
+        if self.spine_contact != "closest" and (self.mu > 0 or self.f_coh > 0):
+            raise ValueError(f"spine_contact '{self.spine_contact}' is frictionless and "
+                             f"cohesionless (got mu = {self.mu}, f_coh = {self.f_coh}); "
+                             "use mu = 0 and f_coh = 0, or spine_contact 'closest'")
         if self.f_coh > 0 and not self.d_coh > 0:
             raise ValueError(f"cohesion f_coh = {self.f_coh} needs a range d_coh > 0")
 
     def check_dimension(self, dimension: int) -> None:
         """Raise ValueError when the model cannot run in ``dimension`` (2 or 3): the end
         bonds are a 2-D law (:func:`pysim.contacts.end_bond`; the case schema's rule)."""
-        if self.spine_contact == "end_bonds" and dimension != 2:
-            raise ValueError(f"spine_contact 'end_bonds' is a 2-D law, and this state is "
-                             f"{dimension}-D; use spine_contact 'closest' in 3-D")
+        if self.spine_contact != "closest" and dimension != 2:
+            raise ValueError(f"spine_contact '{self.spine_contact}' is a 2-D law, and this "
+                             f"state is {dimension}-D; use spine_contact 'closest' in 3-D")
 
     @property
     def law_id(self) -> int:
@@ -117,7 +121,7 @@ class ContactModel:
 
     def pair_params(self) -> np.ndarray:
         return contact_params(self.k_n, self.gamma_n, self.k_t, self.gamma_t, self.mu,
-                              self.f_coh, self.d_coh, self.spine_contact == "end_bonds")
+                              self.f_coh, self.d_coh, SPINE_CONTACTS[self.spine_contact])
 
     def wall_params(self) -> np.ndarray:
         mu = self.mu if self.mu_wall is None else self.mu_wall

@@ -382,9 +382,9 @@ def _check_case(case: dict, source: str, at: str):
     if pr["name"] == "growth" and pr["phi_grow"] >= pr["phi_max"]:
         raise ConfigError(f"{source}: {at}protocol.phi_grow = {pr['phi_grow']} must be below "
                           f"phi_max = {pr['phi_max']}")
-    if c.get("spine_contact") == "end_bonds" and (dim != 2 or c["friction"] > 0
-                                                  or c.get("bond_number", 0) > 0):
-        raise ConfigError(f"{source}: {at}contact.spine_contact = end_bonds is for 2-D "
+    if c.get("spine_contact", "closest") != "closest" and (
+            dim != 2 or c["friction"] > 0 or c.get("bond_number", 0) > 0):
+        raise ConfigError(f"{source}: {at}contact.spine_contact = {c['spine_contact']} is for 2-D "
                           "frictionless, cohesionless rods (dimension 2, friction 0, no "
                           f"bond_number); got dimension {dim}, friction {c['friction']}")
     if c["friction"] > 0 and not c["k_t"] > 0:

@@ -59,9 +59,10 @@ its two particles, so forces do not depend on how many extra pairs the Verlet li
 holds: results are bit-identical across list rebuilds and restarts.
 
 With ``spine_contact = "end_bonds"`` (:func:`end_bond`, frictionless only) a rod pair is
-up to four bonds, each a contact of the same law; a pair's forces, torques and virial
-are the sums over its bonds, and its recorded contact has the summed force, the
-force-weighted mean point, and the normal and overlap of the deepest bond.
+up to four bonds, each a contact of the same law (``"end_bonds_distinct"``: a bond that
+repeats another's two points, :func:`repeats_bond`, counts once); a pair's forces,
+torques and virial are the sums over its bonds, and its recorded contact has the summed
+force, the force-weighted mean point, and the normal and overlap of the deepest bond.
 
 Geometry (science.md section 2): closest points ``p_i = x_i + s u_i`` and
 ``p_j = x_j + t u_j`` of the spines (:func:`pysim.geometry.closest_params`), distance
@@ -72,7 +73,7 @@ The names other modules use are re-exported here (``from pysim.contacts import .
 """
 from __future__ import annotations
 
-from pysim.contacts.kinematics import end_bond, min_image, spine_gap
+from pysim.contacts.kinematics import end_bond, min_image, repeats_bond, spine_gap
 from pysim.contacts.law import pair_force
 from pysim.contacts.pair import REC_COLUMNS, pair_forces, pair_pass
 from pysim.contacts.partition import BLOCK, clear_slots, own_flags, part_bounds
@@ -83,5 +84,5 @@ from pysim.contacts.stats import block_totals, block_worst, worst_overlap
 
 __all__ = ["BLOCK", "CAP", "FJ_COLUMNS", "PAD", "PAIR_SCRATCH", "RCAP", "REC_COLUMNS", "SEP",
            "block_totals", "block_worst", "clear_slots", "end_bond", "min_image",
-           "own_flags", "pair_force", "pair_forces", "pair_pass", "part_bounds",
+           "own_flags", "pair_force", "pair_forces", "pair_pass", "part_bounds", "repeats_bond",
            "reduce_pass", "rod_pass", "sphere_pass", "spine_gap", "worst_overlap"]

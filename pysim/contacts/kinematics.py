@@ -6,7 +6,8 @@ Geometry (science.md section 2): closest points ``p_i = x_i + s u_i`` and
 ``d = |p_j - p_i|``, overlap ``delta = R_i + R_j - d``, normal ``n = (p_j - p_i)/d``,
 contact point in the middle of the overlap ``c = p_i + (R_i - delta/2) n``. With
 ``spine_contact = "end_bonds"`` (:func:`end_bond`, frictionless only) a rod pair is up to
-four bonds, each a contact of the same law.
+four bonds, each a contact of the same law; with ``"end_bonds_distinct"`` a bond that
+joins the same two points as another (:func:`repeats_bond`) counts once.
 """
 from __future__ import annotations
 
@@ -41,18 +42,11 @@ def spine_gap(d0, d1, d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj):
 
 
 @njit
-def end_bond(d0, d1, d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj, k):
-    """Bond ``k`` of the end-bond geometry, ``d = x_j - x_i``: ``k = 0, 1`` the end
-    ``s = -h_i, +h_i`` of spine i against the closest point of spine j, ``k = 2, 3`` the
-    end ``t = -h_j, +h_j`` of spine j against spine i. Returns ``a = p_i - x_i`` and the
-    gap ``g = p_j - p_i`` as :func:`spine_gap`.
-
-    Summing the contact law over the four bonds gives an energy that is smooth where the
-    closest-point law has a kink (parallel side contacts: the closest point jumps from one
-    end of the overlap to the other); a parallel side contact becomes two bonds at the
-    ends of the overlapping projection (science.md's two-bond count), a tip-side contact
-    one bond, a tip-tip contact two coincident ones. In 2-D the spines of a small overlap
-    never cross, so the closest points are always among these bonds."""
+def end_bond_st(d0, d1, d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj, k):
+    """Spine parameters ``(s, t)`` of bond ``k`` of the end-bond geometry (:func:`end_bond`),
+    ``d = x_j - x_i``: ``k = 0, 1`` the end ``s = -h_i, +h_i`` of spine i and
+    ``t = clamp(u_j . (s u_i - d))``, ``k = 2, 3`` the end ``t = -h_j, +h_j`` of spine j
+    and ``s = clamp(u_i . (d + t u_j))``."""
     if k < 2:
         s = -hi if k == 0 else hi
         t = uj0 * (s * ui0 - d0) + uj1 * (s * ui1 - d1) + uj2 * (s * ui2 - d2)
@@ -61,10 +55,44 @@ def end_bond(d0, d1, d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj, k):
         t = -hj if k == 2 else hj
         s = ui0 * (d0 + t * uj0) + ui1 * (d1 + t * uj1) + ui2 * (d2 + t * uj2)
         s = min(max(s, -hi), hi)
+    return s, t
+
+
+@njit
+def end_bond(d0, d1, d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj, k):
+    """Bond ``k`` of the end-bond geometry, ``d = x_j - x_i``: ``k = 0, 1`` the end
+    ``s = -h_i, +h_i`` of spine i against the closest point of spine j, ``k = 2, 3`` the
+    end ``t = -h_j, +h_j`` of spine j against spine i (:func:`end_bond_st`). Returns
+    ``a = p_i - x_i`` and the gap ``g = p_j - p_i`` as :func:`spine_gap`.
+
+    Summing the contact law over the four bonds gives an energy that is smooth where the
+    closest-point law has a kink (parallel side contacts: the closest point jumps from one
+    end of the overlap to the other); a parallel side contact becomes two bonds at the
+    ends of the overlapping projection (science.md's two-bond count), a tip-side contact
+    one bond, a tip-tip contact two coincident ones (one with :func:`repeats_bond`). In
+    2-D the spines of a small overlap never cross, so the closest points are always among
+    these bonds."""
+    s, t = end_bond_st(d0, d1, d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj, k)
     a0 = s * ui0
     a1 = s * ui1
     a2 = s * ui2
     return a0, a1, a2, d0 + t * uj0 - a0, d1 + t * uj1 - a1, d2 + t * uj2 - a2
+
+
+@njit
+def repeats_bond(d0, d1, d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj, k):
+    """Whether end bond ``k`` joins the same two spine points as a bond ``m < k``
+    (:func:`end_bond_st`): an end of spine i against an end of spine j, found once from
+    each side (a tip-tip contact), or the two ends of a spine of length zero. With
+    ``spine_contact = "end_bonds_distinct"`` such a bond is left out, so that a tip-tip
+    contact is one bond, as Marschall & Teitel's (2018) law has it. Clamped parameters
+    are exact, so the comparison is exact."""
+    s, t = end_bond_st(d0, d1, d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj, k)
+    for m in range(k):
+        sm, tm = end_bond_st(d0, d1, d2, ui0, ui1, ui2, hi, uj0, uj1, uj2, hj, m)
+        if sm == s and tm == t:
+            return True
+    return False
 
 
 @inline_njit

@@ -5,24 +5,25 @@ spherocylinders with ``L = 0``), any normal law, friction, cohesion and end bond
 order, and can record the contact table).
 
 With ``spine_contact = "end_bonds"`` (:func:`pysim.contacts.kinematics.end_bond`,
-frictionless only) a rod pair is up to four bonds, each a contact of the same law; a
-pair's forces, torques and virial are the sums over its bonds, and its recorded contact
-has the summed force, the force-weighted mean point, and the normal and overlap of the
-deepest bond.
+frictionless only) a rod pair is up to four bonds, each a contact of the same law (with
+``"end_bonds_distinct"`` a bond that repeats another's two points counts once,
+:func:`pysim.contacts.kinematics.repeats_bond`); a pair's forces, torques and virial
+are the sums over its bonds, and its recorded contact has the summed force, the
+force-weighted mean point, and the normal and overlap of the deepest bond.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from pysim.contacts.kinematics import end_bond, min_image, spine_gap
+from pysim.contacts.kinematics import end_bond, min_image, repeats_bond, spine_gap
 from pysim.contacts.law import pair_force
 from pysim.contacts.partition import BLOCK, _zero_rows
 from pysim.contacts.reactions import (SEP, _finish_row, _no_reaction, _reaction, _slot,
                                       _store)
 from pysim.contacts.stats import (_STATS, _note_overlap, add_virial, block_totals,
                                   block_worst)
-from pysim.forces import (D_COH, END_BONDS, F_COH, GAMMA_N, GAMMA_T, K_N, K_T, MU,
-                          elastic_energy)
+from pysim.forces import (D_COH, DISTINCT_BONDS, END_BONDS, F_COH, GAMMA_N, GAMMA_T, K_N,
+                          K_T, MU, elastic_energy)
 from pysim.jit import njit, pnjit, prange
 
 #: columns of a recorded contact: point (3), normal (3), overlap, force on i (3)
@@ -64,6 +65,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
     use_sep = sep_sigma > 0.0 and fj.shape[0] > SEP
     ends = rods and p[END_BONDS] != 0.0
     nbond = 4 if ends else 1
+    once = ends and p[END_BONDS] == DISTINCT_BONDS
     nb = (n + BLOCK - 1) // BLOCK
     blk = np.zeros((nb if stats else 0, _STATS))
     if scatter:
@@ -125,6 +127,9 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
                                                            uj1, uj2, hj)
                     dist2 = g0 * g0 + g1 * g1 + g2 * g2
                     if dist2 >= reach * reach:
+                        continue
+                    if once and kb > 0 and repeats_bond(d0, d1, d2, ui0, ui1, ui2, hi, uj0,
+                                                        uj1, uj2, hj, kb):
                         continue
                     touching = True
                     h0 = 0.0
@@ -205,6 +210,7 @@ def pair_forces(x, v, omega, u, radius, half, box, periodic, pi, pj, hist, law, 
             rods = True
     ends = rods and p[END_BONDS] != 0.0
     nbond = 4 if ends else 1
+    once = ends and p[END_BONDS] == DISTINCT_BONDS
     for k in range(pi.shape[0]):
         i = pi[k]
         j = pj[k]
@@ -239,6 +245,10 @@ def pair_forces(x, v, omega, u, radius, half, box, periodic, pi, pj, hist, law, 
                                                    half[i], u[j, 0], u[j, 1], u[j, 2], half[j])
             dist2 = g0 * g0 + g1 * g1 + g2 * g2
             if dist2 >= reach * reach:
+                continue
+            if once and kb > 0 and repeats_bond(d0, d1, d2, u[i, 0], u[i, 1], u[i, 2],
+                                                half[i], u[j, 0], u[j, 1], u[j, 2], half[j],
+                                                kb):
                 continue
             nbt += 1
             h0 = 0.0

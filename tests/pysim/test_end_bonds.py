@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pysim.contacts import REC_COLUMNS, pair_forces
-from pysim.forces import HARMONIC, contact_params
+from pysim.forces import HARMONIC, SPINE_CONTACTS, contact_params
 from pysim.simulation import ContactModel
 
 
@@ -14,26 +14,33 @@ def point_segment(p, c, u, h):
     return c + t * u
 
 
-def end_bond_energy(x, theta, r, half, k_e):
+def end_bond_energy(x, theta, r, half, k_e, distinct=False):
     """NumPy energy of the 2-D end-bond law: for each spine end, the harmonic energy
-    ``k_e/2 (delta/d)^2`` of its overlap with the closest point of the other spine."""
+    ``k_e/2 (delta/d)^2`` of its overlap with the closest point of the other spine;
+    ``distinct``: a bond joining the same two points as an earlier one of the pair left out
+    (a tip-tip contact is one bond)."""
     u = np.column_stack([np.cos(theta), np.sin(theta), np.zeros(len(x))])
     e = 0.0
     n = len(x)
     for i in range(n):
         for j in range(i + 1, n):
             rs = r[i] + r[j]
+            seen = []
             for a, b in ((i, j), (j, i)):
                 for s in (-half[a], half[a]):
                     p = x[a] + s * u[a]
                     q = point_segment(p, x[b], u[b], half[b])
+                    ends = {tuple(p), tuple(q)}
+                    if distinct and ends in seen:
+                        continue
+                    seen.append(ends)
                     delta = rs - np.linalg.norm(q - p)
                     if delta > 0:
                         e += 0.5 * k_e * (delta / rs) ** 2
     return e
 
 
-def forces(x, theta, r, half, k_e, record=False):
+def forces(x, theta, r, half, k_e, record=False, spine_contact="end_bonds"):
     n = len(x)
     u = np.column_stack([np.cos(theta), np.sin(theta), np.zeros(n)])
     pi, pj = np.triu_indices(n, 1)
@@ -42,7 +49,7 @@ def forces(x, theta, r, half, k_e, record=False):
     vir = np.zeros((3, 3))
     rec_ij = np.zeros((len(pi), 2), np.int64)
     rec = np.zeros((len(pi), REC_COLUMNS))
-    p = contact_params(k_e, end_bonds=True)
+    p = contact_params(k_e, end_bonds=SPINE_CONTACTS[spine_contact])
     pe, nc = pair_forces(x, np.zeros((n, 3)), np.zeros((n, 3)), u, r, half,
                          np.array([100.0, 100.0, 1.0]), np.array([False, False, False]),
                          pi.astype(np.int32), pj.astype(np.int32), np.zeros((len(pi), 3)),
@@ -50,8 +57,9 @@ def forces(x, theta, r, half, k_e, record=False):
     return f, tq, pe, rec_ij[:nc], rec[:nc]
 
 
+@pytest.mark.parametrize("spine_contact", ["end_bonds", "end_bonds_distinct"])
 @pytest.mark.parametrize("seed", range(6))
-def test_end_bond_forces_and_torques_are_minus_the_energy_gradient(seed):
+def test_end_bond_forces_and_torques_are_minus_the_energy_gradient(seed, spine_contact):
     rng = np.random.default_rng(seed)
     n = 5
     # a small cluster of rods and disks, pushed together so that several overlap slightly
@@ -61,8 +69,9 @@ def test_end_bond_forces_and_torques_are_minus_the_energy_gradient(seed):
     half = rng.uniform(0.0, 0.8, n)
     half[0] = 0.0
     k_e = 1.0
-    f, tq, pe, _, _ = forces(x, theta, r, half, k_e)
-    assert pe == pytest.approx(end_bond_energy(x, theta, r, half, k_e), rel=1e-12, abs=1e-15)
+    distinct = spine_contact == "end_bonds_distinct"
+    f, tq, pe, _, _ = forces(x, theta, r, half, k_e, spine_contact=spine_contact)
+    assert pe == pytest.approx(end_bond_energy(x, theta, r, half, k_e, distinct), rel=1e-12, abs=1e-15)
     assert pe > 0
     h = 1e-7
     for i in range(n):
@@ -70,14 +79,15 @@ def test_end_bond_forces_and_torques_are_minus_the_energy_gradient(seed):
             xp, xm = x.copy(), x.copy()
             xp[i, a] += h
             xm[i, a] -= h
-            g = (end_bond_energy(xp, theta, r, half, k_e)
-                 - end_bond_energy(xm, theta, r, half, k_e)) / (2 * h)
+            g = (end_bond_energy(xp, theta, r, half, k_e, distinct)
+                 - end_bond_energy(xm, theta, r, half, k_e, distinct)) / (2 * h)
             assert f[i, a] == pytest.approx(-g, abs=1e-6)
         if half[i] > 0:
             tp, tm = theta.copy(), theta.copy()
             tp[i] += h
             tm[i] -= h
-            g = (end_bond_energy(x, tp, r, half, k_e) - end_bond_energy(x, tm, r, half, k_e)) / (2 * h)
+            g = (end_bond_energy(x, tp, r, half, k_e, distinct)
+                 - end_bond_energy(x, tm, r, half, k_e, distinct)) / (2 * h)
             assert tq[i, 2] == pytest.approx(-g, abs=1e-6)
     assert np.allclose(f.sum(axis=0), 0.0, atol=1e-12)  # Newton's third law
 
@@ -108,10 +118,44 @@ def test_parallel_side_contact_is_two_bonds_at_the_ends_of_the_overlap():
     assert pe1 == pytest.approx(0.5 * delta**2, rel=1e-9)
 
 
+@pytest.mark.parametrize("spine_contact, bonds", [("end_bonds", 2), ("end_bonds_distinct", 1)])
+def test_tip_tip_contact_is_one_bond_when_distinct(spine_contact, bonds):
+    """Two rods meeting tip to tip at an angle: each tip is the other spine's closest point
+    to it, so the four end bonds hold the same bond twice; the distinct law counts it once,
+    Marschall & Teitel's tip-to-tip contact (their Eq. 25)."""
+    half = np.full(2, 1.0)
+    r = np.full(2, 0.5)
+    theta = np.array([0.0, 0.3])
+    tip0 = np.array([1.0, 0.0, 0.0])
+    gap = 0.99  # tip-to-tip distance: overlap 0.01 along the line between the tips
+    n = np.array([np.cos(0.1), np.sin(0.1), 0.0])
+    u1 = np.array([np.cos(0.3), np.sin(0.3), 0.0])
+    x = np.array([[0.0, 0.0, 0.0], tip0 + gap * n + u1])
+    f, tq, pe, ij, rec = forces(x, theta, r, half, 1.0, record=True, spine_contact=spine_contact)
+    delta = 0.01
+    assert pe == pytest.approx(bonds * 0.5 * delta**2, rel=1e-9)
+    np.testing.assert_allclose(f[0], -bonds * delta * n, rtol=1e-9, atol=1e-15)
+    assert len(ij) == 1 and rec[0, 6] == pytest.approx(delta)
+
+
+def test_side_contact_stays_two_bonds_when_distinct():
+    """The parallel side contact of the test above: its two end bonds join different
+    points, so the distinct law keeps both (the paper's Fig. 6)."""
+    x = np.array([[0.0, 0.0, 0.0], [0.5, 0.99, 0.0]])
+    args = (x, np.zeros(2), np.full(2, 0.5), np.full(2, 1.0), 1.0)
+    f, tq, pe, _, _ = forces(*args, spine_contact="end_bonds_distinct")
+    f4, tq4, pe4, _, _ = forces(*args)
+    assert pe == pytest.approx(2 * 0.5 * 0.01**2, rel=1e-9) and pe == pe4
+    np.testing.assert_array_equal(f, f4)
+    np.testing.assert_array_equal(tq, tq4)
+
+
 def test_end_bonds_are_frictionless_and_named():
     with pytest.raises(ValueError, match="end_bonds' is frictionless"):
         ContactModel("hooke", 1.0, mu=0.5, spine_contact="end_bonds")
-    with pytest.raises(ValueError, match="valid: 'closest', 'end_bonds'"):
+    with pytest.raises(ValueError, match="end_bonds_distinct' is frictionless"):
+        ContactModel("hooke", 1.0, mu=0.5, spine_contact="end_bonds_distinct")
+    with pytest.raises(ValueError, match="valid: 'closest', 'end_bonds', 'end_bonds_distinct'$"):
         ContactModel("hooke", 1.0, spine_contact="sides")
 
 

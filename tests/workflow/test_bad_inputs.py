@@ -63,6 +63,12 @@ CASES = [
     (("contact", "gamma_n"), -1, "contact.gamma_n = -1 is not allowed; use a number >= 0"),
     (("contact", "friction"), -0.1,
      "contact.friction = -0.1 is not allowed; use a number >= 0 and <= 10"),
+    (("contact", "spine_contact"), "end_bonds_distinct",
+     "contact.spine_contact = end_bonds_distinct is for 2-D frictionless, cohesionless rods "
+     "(dimension 2, friction 0, no bond_number); got dimension 3, friction 0.0"),
+    (("contact", "spine_contact"), "sides",
+     "contact.spine_contact = 'sides' is not allowed; use one of 'closest', 'end_bonds', "
+     "'end_bonds_distinct'"),
     (("contact", "stiffness"), 5,
      "unknown key 'contact.stiffness'; allowed here: bond_number, bond_stiffening, cohesion_range, contact_time, "
      "friction, gamma_bg, gamma_n, "

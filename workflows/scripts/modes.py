@@ -166,9 +166,10 @@ def modes_of(sim, case: dict, step: int, metric: str = "paper") -> tuple[pd.Data
     a, b = fr.index_of(ct.i), fr.index_of(ct.j)
     pairs = np.column_stack([a, b])[keep[a] & keep[b]]
     dof = am.dofs(fr, keep)
-    end_bonds = (case["contact"].get("spine_contact", "closest") == "end_bonds"
-                 and bool(np.any(fr.length > 0)))
-    hk, hs, _ = am.hessian_parts(fr, pairs, dof, k_n=k_n, end_bonds=end_bonds)
+    spine = case["contact"].get("spine_contact", "closest")
+    end_bonds = spine != "closest" and bool(np.any(fr.length > 0))
+    hk, hs, _ = am.hessian_parts(fr, pairs, dof, k_n=k_n, end_bonds=end_bonds,
+                                 distinct=spine == "end_bonds_distinct")
     if metric == "paper":
         weights = am.dof_lengths(0.5 * state.length, dof)
     else:
