@@ -138,6 +138,22 @@ def test_tip_tip_contact_is_one_bond_when_distinct(spine_contact, bonds):
     assert len(ij) == 1 and rec[0, 6] == pytest.approx(delta)
 
 
+def test_distinct_bonds_step_where_a_tip_passes_the_other_spines_end():
+    """The price of the distinct law: rod 1 stands on rod 0 near rod 0's tip. While rod 1's
+    tip lies over rod 0's spine, rod 1's tip against rod 0's side and rod 0's tip against
+    rod 1's tip are two bonds; once it lies beyond, both are the tip-tip bond, counted
+    once, and the energy halves. The four end bonds have no such step."""
+    def energy(dx, spine_contact):
+        x = np.array([[0.0, 0.0, 0.0], [1.0 + dx, 1.999, 0.0]])
+        return forces(x, np.array([0.0, np.pi / 2]), np.full(2, 0.5), np.full(2, 1.0), 1.0,
+                      spine_contact=spine_contact)[2]
+    two = 2 * 0.5 * 0.001**2
+    assert energy(-1e-6, "end_bonds") == pytest.approx(two, rel=1e-6)
+    assert energy(1e-6, "end_bonds") == pytest.approx(two, rel=1e-6)
+    assert energy(-1e-6, "end_bonds_distinct") == pytest.approx(two, rel=1e-6)
+    assert energy(1e-6, "end_bonds_distinct") == pytest.approx(two / 2, rel=1e-6)
+
+
 def test_side_contact_stays_two_bonds_when_distinct():
     """The parallel side contact of the test above: its two end bonds join different
     points, so the distinct law keeps both (the paper's Fig. 6)."""
