@@ -168,3 +168,16 @@ def test_modes_refuse_another_contact_law(tmp_path):
     (run.parent / "case.yaml").write_text(yaml.safe_dump(case))
     with pytest.raises(ValueError, match="harmonic law, got 'hooke'"):
         modes.stable_state_modes(run)
+
+
+def test_a_packing_that_relaxes_apart_is_skipped_with_its_reason(tmp_path, capsys):
+    """A run marked converged whose packing, relaxed again, unjams (every particle a
+    rattler) has no modes to take: a one-line reason, and the other runs go on."""
+    loose = fake_jammed_run(tmp_path / "loose", phi=0.5)
+    with pytest.raises(ValueError, match="has no rigid backbone .* it was not jammed$"):
+        modes.stable_state_modes(loose)
+    good = fake_jammed_run(tmp_path / "good")
+    assert modes.main(["--runs", str(loose), str(good), "--out", str(tmp_path / "m.png"),
+                       "--table", str(tmp_path / "modes.csv"), "--energies"]) == 0
+    assert f"modes: skipping {loose}: the relaxed packing" in capsys.readouterr().err
+    assert len(pd.read_csv(tmp_path / "modes.csv")) == 1

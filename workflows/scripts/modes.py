@@ -166,6 +166,9 @@ def modes_of(sim, case: dict, step: int, metric: str = "paper") -> tuple[pd.Data
     a, b = fr.index_of(ct.i), fr.index_of(ct.j)
     pairs = np.column_stack([a, b])[keep[a] & keep[b]]
     dof = am.dofs(fr, keep)
+    if len(dof) == 0:
+        raise ValueError(f"the relaxed packing at step {step} has no rigid backbone (every "
+                         "particle a rattler): it was not jammed")
     spine = case["contact"].get("spine_contact", "closest")
     end_bonds = spine != "closest" and bool(np.any(fr.length > 0))
     hk, hs, _ = am.hessian_parts(fr, pairs, dof, k_n=k_n, end_bonds=end_bonds,
@@ -382,7 +385,11 @@ def main(argv=None) -> int:
             sys.stderr.write(f"modes: skipping {run} (status {record.get('status')}, "
                              f"converged {record.get('converged')})\n")
             continue
-        table, summary = stable_state_modes(run, a.metric)
+        try:
+            table, summary = stable_state_modes(run, a.metric)
+        except ValueError as err:  # relaxed further, the state unjammed
+            sys.stderr.write(f"modes: skipping {run}: {err}\n")
+            continue
         variant, seed = run.parent.parent.name, run.parent.name
         steps, states = [summary], [table]
         for target in a.energies:
