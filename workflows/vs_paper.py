@@ -149,12 +149,24 @@ def closest_jamming_rows(study: str, root: Path) -> tuple[pd.DataFrame, list[dic
     return results, runs
 
 
+def _converged_only(summary: pd.DataFrame) -> pd.DataFrame:
+    """``summary.csv`` rows without the measurements of runs that report ``converged``
+    0 (a jammed state whose bisection ended without a stable state: its ``phi_j`` is no
+    jamming point); their ``converged`` row stays."""
+    keys = ["study", "case", "engine", "seed"]
+    bad = summary.loc[(summary["observable"] == "converged") & (summary["value"] == 0), keys]
+    if bad.empty:
+        return summary
+    hit = summary[keys].apply(tuple, axis=1).isin(set(bad.apply(tuple, axis=1)))
+    return summary[~hit | (summary["observable"] == "converged")]
+
+
 def run_table(results_dirs) -> tuple[pd.DataFrame, pd.DataFrame]:
     """``(runs, results)`` of every ``summary.csv`` under ``results_dirs`` (with the band
     fractions of any ``<study>/modes.csv``, the cross-rate rows of any
     ``<study>/growth_alpha*.csv`` and the characteristic densities of any
-    ``<study>/closest_jamming.csv`` beside it): one run row per
-    ``study, case, engine, seed`` with :func:`case_terms` of its ``case.yaml``
+    ``<study>/closest_jamming.csv`` beside it; no measurements of a run that did not
+    converge, :func:`_converged_only`): one run row per ``study, case, engine, seed`` with :func:`case_terms` of its ``case.yaml``
     (``<results>/<study>/<case>/seed<k>/case.yaml``). A folder without a summary is
     skipped."""
     run_rows, parts = [], []
@@ -163,8 +175,8 @@ def run_table(results_dirs) -> tuple[pd.DataFrame, pd.DataFrame]:
         if not summary.is_file():
             continue
         df = pd.read_csv(summary)
-        parts.append(df[["study", "case", "engine", "seed", "observable", "value",
-                         "uncertainty"]])
+        parts.append(_converged_only(df)[["study", "case", "engine", "seed", "observable",
+                                          "value", "uncertainty"]])
         parts += [mode_rows(study, root / study / "modes.csv")
                   for study in df["study"].unique() if (root / study / "modes.csv").is_file()]
         parts += [growth_rate_rows(study, root) for study in df["study"].unique()]
@@ -225,7 +237,9 @@ def carry_forward(new: pd.DataFrame, old: pd.DataFrame) -> tuple[pd.DataFrame, i
     """``(table, kept)``: ``new`` with the rows of an earlier table ``old`` that the runs
     at hand do not supersede: the measurements of runs whose results folders are not given
     this time (a long run done on another machine). Rows that name runs are matched by
-    ``id`` and the studies they draw on, and :func:`_standing` chooses between them; a row
+    ``id`` and the studies they draw on, and :func:`_standing` chooses between them; an
+    old ``value`` row that shares no run with the new rows of its ``id`` (another variant
+    of a study now partly rerun) is kept as it is; a row
     of ``new`` without runs gives way to the old rows of its ``id``. ``kept`` old rows
     are in ``table``; the order is ``new``'s."""
     def studies(cell):
@@ -233,9 +247,16 @@ def carry_forward(new: pd.DataFrame, old: pd.DataFrame) -> tuple[pd.DataFrame, i
 
     old = old.astype(object).reindex(columns=new.columns)
     old = old[[bool(_runs(r)) for r in old["runs"]]]
+    at_hand: dict = {}  # id -> the runs its new rows draw on
+    for ident, cell_ in zip(new["id"], new["runs"]):
+        at_hand.setdefault(ident, set()).update(_runs(cell_))
     earlier: dict = {}  # id -> studies -> old row labels
     for i, r in old.iterrows():
-        earlier.setdefault(r["id"], {}).setdefault(studies(r["runs"]), []).append(i)
+        key = studies(r["runs"])
+        if r.get("kind") == "value" and not at_hand.get(r["id"], set()) & set(_runs(r["runs"])):
+            # a value measured on other variants than those at hand: nothing supersedes it
+            key = frozenset(_runs(r["runs"]))
+        earlier.setdefault(r["id"], {}).setdefault(key, []).append(i)
     parts, n = [], 0
     for ident, rows in new.groupby("id", sort=False):
         chosen, groups = [], {}

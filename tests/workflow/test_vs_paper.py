@@ -112,6 +112,13 @@ def test_keep_carries_the_earlier_answers_that_these_results_do_not_give(tmp_pat
     earlier.loc[0, "runs"] = "tapping_x/an7"  # other runs of the study: both stand
     got, n = carry_forward(pd.read_csv(tmp_path / "new.csv"), earlier)
     assert n == 1 and list(got.runs) == ["tapping_x/an6", "tapping_x/an7", "elsewhere/an9"]
+    # a value measured on another variant of a study now partly rerun is kept beside
+    # the new one: a rerun of one variant supersedes only the rows it shares runs with
+    earlier.loc[0, ["verdict", "runs"]] = ["agrees", "tapping_x/an9"]
+    fresh = pd.read_csv(tmp_path / "new.csv")
+    fresh.loc[0, "verdict"] = "agrees"
+    got, n = carry_forward(fresh, earlier)
+    assert n == 1 and list(got.runs) == ["tapping_x/an6", "tapping_x/an9", "elsewhere/an9"]
     # a 'not run' over all the runs behind an old verdict stands: the rule or the
     # reference changed (a fit that now waits for a point it used to do without)
     earlier.loc[0, ["verdict", "runs"]] = ["agrees", "tapping_x/an6"]
@@ -166,6 +173,25 @@ def test_band_fractions_of_modes_csv_join_the_runs(tmp_path):
     assert list(far.value) == [4e-4, 5e-4]
     assert set(low.engine) == {"pysim"} and set(low.case) == {"alpha4"}
     assert "bonds" not in set(results.observable)
+    assert len(runs) == 2
+
+
+def test_a_jammed_state_that_did_not_converge_measures_nothing(tmp_path):
+    """Seed 2's bisection ended without a stable state (``converged`` 0): its ``phi_j`` is
+    no jamming point and stays out, its ``converged`` row and its run row stay."""
+    root = tmp_path / "results"
+    rows = []
+    for seed, ok in ((1, 1.0), (2, 0.0)):
+        d = root / "j2d" / "alpha1" / f"seed{seed}"
+        d.mkdir(parents=True)
+        (d / "case.yaml").write_text(yaml.safe_dump(CASE_2D))
+        rows += [{"study": "j2d", "case": "alpha1", "engine": "pysim", "seed": seed,
+                  "observable": name, "value": value, "uncertainty": float("nan")}
+                 for name, value in (("phi_j", 0.89 + seed / 1000), ("converged", ok))]
+    pd.DataFrame(rows).to_csv(root / "summary.csv", index=False)
+    runs, results = run_table([root])
+    assert list(results[results.observable == "phi_j"].value) == [0.891]
+    assert sorted(results[results.observable == "converged"].seed) == [1, 2]
     assert len(runs) == 2
 
 
