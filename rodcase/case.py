@@ -384,8 +384,8 @@ def _check_case(case: dict, source: str, at: str):
                           f"phi_max = {pr['phi_max']}")
     if c.get("spine_contact", "closest") != "closest" and (
             dim != 2 or c["friction"] > 0 or c.get("bond_number", 0) > 0):
-        raise ConfigError(f"{source}: {at}contact.spine_contact = {c['spine_contact']} is for 2-D "
-                          "frictionless, cohesionless rods (dimension 2, friction 0, no "
+        raise ConfigError(f"{source}: {at}contact.spine_contact = {c['spine_contact']} is "
+                          "for 2-D frictionless, cohesionless rods (dimension 2, friction 0, no "
                           f"bond_number); got dimension {dim}, friction {c['friction']}")
     if c["friction"] > 0 and not c["k_t"] > 0:
         raise ConfigError(f"{source}: {at}contact.k_t = {c['k_t']} must be > 0 when "

@@ -157,7 +157,7 @@ def _converged_only(summary: pd.DataFrame) -> pd.DataFrame:
     bad = summary.loc[(summary["observable"] == "converged") & (summary["value"] == 0), keys]
     if bad.empty:
         return summary
-    hit = summary[keys].apply(tuple, axis=1).isin(set(bad.apply(tuple, axis=1)))
+    hit = summary.set_index(keys).index.isin(bad.set_index(keys).index)
     return summary[~hit | (summary["observable"] == "converged")]
 
 
@@ -166,7 +166,8 @@ def run_table(results_dirs) -> tuple[pd.DataFrame, pd.DataFrame]:
     fractions of any ``<study>/modes.csv``, the cross-rate rows of any
     ``<study>/growth_alpha*.csv`` and the characteristic densities of any
     ``<study>/closest_jamming.csv`` beside it; no measurements of a run that did not
-    converge, :func:`_converged_only`): one run row per ``study, case, engine, seed`` with :func:`case_terms` of its ``case.yaml``
+    converge, :func:`_converged_only`): one run row per ``study, case, engine, seed``
+    with :func:`case_terms` of its ``case.yaml``
     (``<results>/<study>/<case>/seed<k>/case.yaml``). A folder without a summary is
     skipped."""
     run_rows, parts = [], []

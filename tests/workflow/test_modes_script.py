@@ -168,6 +168,10 @@ def test_modes_refuse_another_contact_law(tmp_path):
     (run.parent / "case.yaml").write_text(yaml.safe_dump(case))
     with pytest.raises(ValueError, match="harmonic law, got 'hooke'"):
         modes.stable_state_modes(run)
+    # the script skips states that came apart, not cases it cannot read
+    with pytest.raises(ValueError, match="harmonic law, got 'hooke'"):
+        modes.main(["--runs", str(run), "--out", str(tmp_path / "m.png"),
+                    "--table", str(tmp_path / "modes.csv"), "--energies"])
 
 
 def test_a_packing_that_relaxes_apart_is_skipped_with_its_reason(tmp_path, capsys):

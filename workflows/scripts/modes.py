@@ -41,6 +41,10 @@ ZERO = 1e-12
 RUNG_RTOL = 0.25
 
 
+class NotJammed(ValueError):
+    """A state that, relaxed again, has no rigid backbone left: no modes to take."""
+
+
 def _frame_contacts(sim, step: int) -> tuple[Frame, Contacts]:
     s = sim.state
     ids = np.arange(1, s.n + 1)
@@ -167,8 +171,8 @@ def modes_of(sim, case: dict, step: int, metric: str = "paper") -> tuple[pd.Data
     pairs = np.column_stack([a, b])[keep[a] & keep[b]]
     dof = am.dofs(fr, keep)
     if len(dof) == 0:
-        raise ValueError(f"the relaxed packing at step {step} has no rigid backbone (every "
-                         "particle a rattler): it was not jammed")
+        raise NotJammed(f"the relaxed packing at step {step} has no rigid backbone (every "
+                        "particle a rattler): it was not jammed")
     spine = case["contact"].get("spine_contact", "closest")
     end_bonds = spine != "closest" and bool(np.any(fr.length > 0))
     hk, hs, _ = am.hessian_parts(fr, pairs, dof, k_n=k_n, end_bonds=end_bonds,
@@ -387,7 +391,7 @@ def main(argv=None) -> int:
             continue
         try:
             table, summary = stable_state_modes(run, a.metric)
-        except ValueError as err:  # relaxed further, the state unjammed
+        except NotJammed as err:  # relaxed further, the state came apart
             sys.stderr.write(f"modes: skipping {run}: {err}\n")
             continue
         variant, seed = run.parent.parent.name, run.parent.name
