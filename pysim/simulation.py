@@ -17,7 +17,7 @@ Rods drop under gravity onto a frictional floor::
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -548,6 +548,17 @@ class Simulation:
                              f"gamma_rot = {gamma_rot}")
         self.params["gamma_bg"] = float(gamma_bg)
         self.params["gamma_rot"] = float(gamma_rot)
+
+    def set_spine_contact(self, spine_contact: str):
+        """Change the rods' contact rule (:attr:`ContactModel.spine_contact`) from now on,
+        and evaluate the forces again under it. The pair list stays: every rule has the
+        same reach, and the rules other than ``"closest"`` are frictionless, so there is
+        no tangential history to carry."""
+        model = replace(self.model, spine_contact=spine_contact)
+        model.check_dimension(self.state.dimension)
+        self.model = model
+        self._cp = model.pair_params()
+        self.compute_forces()
 
     def stress(self) -> np.ndarray:
         """Contact stress ``sigma_ab = (1/V) sum_c l^c_a F^c_b`` (tension positive) of the

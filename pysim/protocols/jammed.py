@@ -1,7 +1,10 @@
 """Mechanically stable packings at jamming (science.md, 2-D compression protocol).
 
 1. **Compress** overdamped (Heun, substrate drag ``k_d``) at rate ``kappa`` from the
-   random zero-energy start. Once the contact pressure exceeds ``pressure_start`` (in
+   random zero-energy start, with the rods' contact rule ``protocol.compress_spine_contact``
+   where given (Marschall & Teitel 2018 compress with one contact at the closest points,
+   their Eq. 3, and minimise with two bonds side to side, their Fig. 6); every relaxation
+   uses ``contact.spine_contact``. Once the contact pressure exceeds ``pressure_start`` (in
    units of ``k_n / D^(d-1)``), the packing is relaxed (FIRE, on a copy) every
    ``thermo_every`` steps; the compression stops at the first packing whose relaxed
    elastic energy per area ``U/L^d`` exceeds ``energy_target`` (jammed).
@@ -299,10 +302,14 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     """Run the protocol; returns a summary (``phi_j``, ``energy_density``, residuals)."""
     p = case["protocol"]
     files = RunFiles(out_dir, init["ids"])
+    # the relaxations' law; the compression may have its own (protocol.compress_spine_contact)
+    law = case["contact"].get("spine_contact", "closest")
     if resume:
         sim, drv = files.resume()
     else:
         sim = simulation_from_case(case, init, check_dt=False)
+        if p.get("compress_spine_contact", law) != law:
+            sim.set_spine_contact(p["compress_spine_contact"])
         files.start()
         drv = {"phase": "compress", "lo": None, "hi": None, "bisections": 0}
     s = sim.state
@@ -352,6 +359,8 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
                 continue
             # relax a copy: the compression itself goes on from the unrelaxed packing
             trial = _copy(sim)
+            if trial.model.spine_contact != law:
+                trial.set_spine_contact(law)
             e, balanced, settled = relaxed_energy(trial)
             bar.update(1)
             bar.set_postfix(phi=f"{phi:.4f}", U=f"{e:.2e}", refresh=False)

@@ -236,3 +236,27 @@ def test_end_bonds_are_refused_in_three_dimensions():
 def test_contact_model_refuses_what_the_case_schema_refuses(kw, message):
     with pytest.raises(ValueError, match=message):
         ContactModel("hooke", **kw)
+
+
+def test_set_spine_contact_gives_the_new_laws_forces_at_once(tmp_path):
+    """Switching the rule of a running simulation (the jammed protocol compresses under
+    one rule and relaxes under another) gives the forces of a simulation built with the
+    new rule, and a checkpoint keeps the rule; 3-D states refuse the 2-D rules."""
+    from pysim import checkpoint
+    from tests.pysim.helpers import overlapping_rods
+
+    sim = overlapping_rods(2, 40, 1.0, 0.9, 3, "closest")
+    ref = overlapping_rods(2, 40, 1.0, 0.9, 3, "end_bonds_distinct")
+    ref.compute_forces()
+    sim.compute_forces()
+    assert not np.allclose(sim.f, ref.f)  # the rules differ on this packing
+    sim.set_spine_contact("end_bonds_distinct")
+    assert sim.model.spine_contact == "end_bonds_distinct"
+    np.testing.assert_array_equal(sim.f, ref.f)
+    np.testing.assert_array_equal(sim.torque, ref.torque)
+    checkpoint.save(sim, tmp_path / "c.npz")
+    assert checkpoint.load(tmp_path / "c.npz")[0].model.spine_contact == "end_bonds_distinct"
+    rods3 = overlapping_rods(3, 40, 1.0, 0.5, 3, "closest")
+    with pytest.raises(ValueError, match=r"^spine_contact 'end_bonds' is a 2-D law"):
+        rods3.set_spine_contact("end_bonds")
+    assert rods3.model.spine_contact == "closest"

@@ -432,3 +432,41 @@ def test_growth_relaxed_by_damped_dynamics(tmp_path):
     first = cycles.iloc[0]
     grown_at = (first.step - first.iterations) * 1e-4  # the growth's dt from step 0
     assert th.loc[first.step, "time"] == pytest.approx(grown_at + first.iterations * 5e-5)
+
+
+@pytest.mark.slow
+def test_jammed_compresses_and_relaxes_under_their_own_rules(tmp_path, monkeypatch):
+    """``protocol.compress_spine_contact``: every compression step runs under that rule
+    and every relaxation under ``contact.spine_contact`` (Marschall & Teitel compress
+    with the closest points and minimise with end bonds); the stable state keeps the
+    relaxations' rule."""
+    from pysim import checkpoint, io
+    from pysim.protocols import jammed
+    from pysim.simulation import Simulation
+
+    laws = {"compress": set(), "relax": set()}
+    real_overdamped, real_relax = Simulation.run_overdamped, jammed.relax
+
+    def overdamped(self, *args, **kwargs):
+        laws["compress"].add(self.model.spine_contact)
+        return real_overdamped(self, *args, **kwargs)
+
+    def relax(sim, *args, **kwargs):
+        laws["relax"].add(sim.model.spine_contact)
+        return real_relax(sim, *args, **kwargs)
+
+    monkeypatch.setattr(Simulation, "run_overdamped", overdamped)
+    monkeypatch.setattr(jammed, "relax", relax)
+    case = validate_case({
+        "particles": {"n": 64, "dimension": 2, "aspect_ratio": 0.5,
+                      "diameter": {"distribution": "bidisperse", "mean": 1.0, "ratio": 1.4}},
+        "contact": {"law": "harmonic", "k_n": 1.0, "spine_contact": "end_bonds_distinct"},
+        "protocol": {"name": "jammed", "phi_init": 0.4, "rate": 2e-3, "dt": 0.01,
+                     "compress_spine_contact": "closest", "max_bisections": 1},
+        "output": {"thermo_every": 500, "dump_every": 100000}, "seed": 2})
+    write_initial(case, tmp_path / "init.data")
+    jammed.run(case, io.read_particle_data(tmp_path / "init.data"), tmp_path / "out",
+               progress=False)
+    assert laws == {"compress": {"closest"}, "relax": {"end_bonds_distinct"}}
+    state = checkpoint.load(tmp_path / "out" / jammed.STABLE_STATE)[0]
+    assert state.model.spine_contact == "end_bonds_distinct"
