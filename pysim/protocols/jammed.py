@@ -17,7 +17,8 @@
    compression of an unjammed one lands in another basin.) The bisection ends when
    ``U/L^d`` lies within a factor 2 of ``energy_target``, or the bracket is narrower than
    :data:`PHI_TOL` (opened again when the jammed packing still holds more than
-   :data:`REOPEN_ENERGY`: the ends lie in different basins; see :func:`next_trial`), or
+   :data:`REOPEN_ENERGY`, the ends lying in different basins, or was still sliding when
+   its relaxation ran out of rounds; see :func:`next_trial`), or
    ``max_bisections`` is reached. Each relaxation (:func:`relax`) runs FIRE and L-BFGS
    (:func:`pysim.minimize.lbfgs`) in rounds until the energy has stopped falling: a packing
    with small residual forces may still be sliding towards an unjammed state, and taken as
@@ -263,8 +264,11 @@ def next_trial(drv: dict, e: float, target: float, max_bisections: int) -> float
     Done when ``e`` is within a factor 2 of ``target``, after ``max_bisections``, or when
     the bracket is narrower than :data:`PHI_TOL` with ``e`` at most :data:`REOPEN_ENERGY`
     (an energy jump inside the bracket). A bracket that closes above
-    :data:`REOPEN_ENERGY` is opened again (counted in ``drv["reopened"]``), on the side
-    where the search can go on:
+    :data:`REOPEN_ENERGY`, or on a jammed packing whose relaxation never settled
+    (``drv["settled"]`` false: it was still sliding, as a rod tip passing the end of
+    another spine does under ``end_bonds_distinct``) while the lower end came from a
+    trial, is opened again (counted in ``drv["reopened"]``), on the side where the
+    search can go on:
 
     * ``lo`` from a trial of the bisection (``drv["lo_trial"]``): the jammed packing
       unjams on the smallest expansion, the edge of its basin. The bracket is opened
@@ -281,7 +285,10 @@ def next_trial(drv: dict, e: float, target: float, max_bisections: int) -> float
     closed = (drv["lo"] is not None and drv["hi"] is not None
               and drv["hi"] - drv["lo"] < PHI_TOL)
     if closed:
-        if e <= REOPEN_ENERGY:
+        # a held packing still sliding (its relaxation never settled) is no end of the
+        # bracket either: expansions of it unjam, and so does it, relaxed longer
+        sliding = not drv.get("settled", True) and drv.get("lo_trial", False)
+        if e <= REOPEN_ENERGY and not sliding:
             return None
         drv["reopened"] = drv.get("reopened", 0) + 1
         if drv.get("lo_trial", False):

@@ -236,10 +236,11 @@ def test_converged_needs_the_energy_settled_and_balanced_forces():
 
 def test_bisection_reopens_a_bracket_that_closes_far_above_the_target():
     """``next_trial``: a bracket narrower than PHI_TOL on a packing far above the target
-    energy is opened again on the side where the search can go on. Lower end from a
-    trial (64 rods, alpha 0.5, seed 2: U/L^2 = 4e-6, the jammed packing unjams on the
-    smallest expansion): opened above, and the trials compress the unjammed packing in
-    steps of PHI_TOL, 2 PHI_TOL, 4 PHI_TOL... until one jams, then bisect below it. Lower
+    energy, or on a jammed packing still sliding, is opened again on the side where the
+    search can go on. Lower end from a trial (64 rods, alpha 0.5, seed 2: U/L^2 = 4e-6,
+    the jammed packing unjams on the smallest expansion): opened above, and the trials
+    compress the unjammed packing in steps of PHI_TOL, 2 PHI_TOL, 4 PHI_TOL... until one
+    jams, then bisect below it. Lower
     end from the compression, another packing (the quick profile's alpha 0.12 seed 1:
     U/L^2 = 8.8e-6): opened below and bisected from ``0.9 hi``. A closed bracket with an
     energy jump below REOPEN_ENERGY ends the bisection, as does an energy on target or
@@ -261,9 +262,16 @@ def test_bisection_reopens_a_bracket_that_closes_far_above_the_target():
     assert next_trial(drv, 8.8e-6, 1e-15, 50) == pytest.approx(0.95 * hi)
     assert drv["lo"] is None and drv["hi"] == hi and drv["reopened"] == 1
     # an energy jump inside the bracket, below REOPEN_ENERGY: nothing better to find
-    drv = {**closed, "lo_trial": True}
+    drv = {**closed, "lo_trial": True, "settled": True}
     assert next_trial(drv, 0.5 * REOPEN_ENERGY, 1e-15, 50) is None
     assert drv["hi"] == closed["hi"] and "reopened" not in drv
+    # ... unless the jammed packing was still sliding (alpha 0.01, end_bonds_distinct,
+    # seed 1: U/L^2 = 5.4e-15, relaxed longer it came apart): opened above
+    drv = {**closed, "lo_trial": True, "settled": False}
+    assert next_trial(drv, 5.4e-15, 1e-15, 50) == pytest.approx(lo + PHI_TOL, abs=1e-15)
+    assert drv["hi"] is None and drv["reopened"] == 1
+    # a sliding packing above a lower end from the compression: nothing to open
+    assert next_trial({**closed, "settled": False}, 5.4e-15, 1e-15, 50) is None
     # open bracket: its middle; on target or out of bisections: done
     drv = {"lo": 0.86, "hi": 0.87, "bisections": 3}
     assert next_trial(drv, 8.8e-6, 1e-15, 50) == pytest.approx(0.865)
