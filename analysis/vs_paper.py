@@ -412,19 +412,17 @@ def _fit_rows(ref, runs, results) -> list[dict]:
     over = _over(ref)  # the paper's own points: a fit over others is a different fit
     out = []
     for (engine, study), g in groups.items():
-        good, _, unchecked = _matching(g, conds, fitted)
+        good, worst, unchecked = _matching(g, conds, fitted)
         alphas = sorted(a for a in good["alpha"].astype(float).unique() if a > 0)
         row = {**base, "engine": engine, "runs": _runs_label(good) if len(good) else study,
                "note": f"unchecked: {', '.join(unchecked)}" if unchecked else ""}
-        if over:
-            use = over
-            lack = [a for a in use if not np.isclose(alphas, a, rtol=RTOL, atol=0.0).any()]
-            short = (f"the fit takes alpha = {'; '.join(f'{a:g}' for a in use)}, "
-                     f"{study} lacks {'; '.join(f'{a:g}' for a in lack)}") if lack else ""
-        else:
-            use = alphas[:FIT_POINTS]
-            short = (f"the fit takes {FIT_POINTS} aspect ratios > 0 under the paper's "
-                     f"conditions, {study} has {len(use)}") if len(use) < FIT_POINTS else ""
+        short, elsewise = _fit_short(alphas, over, study), None
+        if short and worst is not None:  # the study's other runs make the fit: ours there
+            every = sorted(a for a in g["alpha"].astype(float).unique() if a > 0)
+            if not _fit_short(every, over, study):
+                short, elsewise, good, alphas = "", worst[1], g, every
+                row["runs"] = _runs_label(g)
+        use = over if over else alphas[:FIT_POINTS]
         if short:
             row["verdict"] = "not run"
             row["note"] = "; ".join(x for x in (row["note"], short) if x)
@@ -450,10 +448,24 @@ def _fit_rows(ref, runs, results) -> list[dict]:
             row["verdict"] = "unresolved"
             notes.append(f"the fit does not determine {param} (standard error {u_ours:.3g} "
                          f"against a size of {size:g})")
+        if elsewise:  # ours under other conditions: for information, no verdict on it
+            row.update(verdict="conditions differ: " + "; ".join(elsewise),
+                       diff_sigma=float("nan"))
         row["note"] = "; ".join(x for x in notes if x)
         out.append(row)
     return out or [{**base, "engine": "", "verdict": "not run",
                     "note": f"no run reports {fitted}"}]
+
+
+def _fit_short(alphas, over, study) -> str:
+    """Why the aspect ratios ``alphas`` (> 0) of ``study`` cannot make a fit over the row's
+    ``over`` (else :data:`FIT_POINTS` of them); empty when they can."""
+    if over:
+        lack = [a for a in over if not np.isclose(alphas, a, rtol=RTOL, atol=0.0).any()]
+        return (f"the fit takes alpha = {'; '.join(f'{a:g}' for a in over)}, "
+                f"{study} lacks {'; '.join(f'{a:g}' for a in lack)}") if lack else ""
+    return (f"the fit takes {FIT_POINTS} aspect ratios > 0 under the paper's conditions, "
+            f"{study} has {len(alphas)}") if len(alphas) < FIT_POINTS else ""
 
 
 def _trend_rows(ref, runs, results) -> list[dict]:

@@ -39,8 +39,9 @@ def case_terms(case: dict) -> dict:
     """A run's case in the vocabulary of ``references/README.md``: the point parameters
     (``alpha``, ``d``, ``sigma``, ``e_n``, ``Gamma``, ``bo_g``) and the condition keys
     (``tap``, ``n``, ``dimension``, ``protocol``, ``rate``, ``friction``, ``law``,
-    ``bidisperse``, ``container``, ``width_over_length``, ``feed``); ``nan`` where a term
-    does not apply."""
+    ``rod_contact``, ``compress_contact``, ``bidisperse``, ``container``,
+    ``width_over_length``, ``feed``); ``nan`` where a term does not apply (the rod contact
+    rules to spheres and disks)."""
     nan = float("nan")
     p, c, pr = case["particles"], case.get("contact", {}), case["protocol"]  # hard spheres: none
     cont = case.get("container")
@@ -49,6 +50,9 @@ def case_terms(case: dict) -> dict:
     dist = diam.get("distribution", "mono")
     deposit = pr["name"] == "deposit"
     length = diam["mean"] * (1.0 + alpha)
+    # the rods' contact rule of the final state, and that of the compression before it
+    rule = c.get("spine_contact", "closest") if alpha > 0 else nan
+    squeeze = pr.get("compress_spine_contact", rule) if alpha > 0 else nan
     return {
         "family": family(case),
         "alpha": alpha,
@@ -64,6 +68,8 @@ def case_terms(case: dict) -> dict:
         "rate": float(pr["rate"]) if "rate" in pr else nan,
         "friction": float(c.get("friction", 0.0)),
         "law": c.get("law", nan),
+        "rod_contact": rule,
+        "compress_contact": squeeze,
         "bidisperse": float(diam.get("ratio", 1.4)) if dist == "bidisperse" else nan,
         "container": cont["shape"] if cont else "periodic",
         "width_over_length": (cont["width"] / length if cont and "width" in cont else nan),
@@ -203,11 +209,12 @@ def run_table(results_dirs) -> tuple[pd.DataFrame, pd.DataFrame]:
     return runs, results
 
 
-def vs_paper(references, results_dirs) -> pd.DataFrame:
+def vs_paper(references, results_dirs) -> tuple[pd.DataFrame, set]:
     """``vs_paper.csv`` of the reference tables in ``references`` against the runs of
-    ``results_dirs``."""
+    ``results_dirs``, and the runs it judged (``study/case``, for :func:`carry_forward`)."""
     runs, results = run_table(results_dirs)
-    return match(read_references(references), runs, results)
+    judged = set(runs["study"] + "/" + runs["case"]) if len(runs) else set()
+    return match(read_references(references), runs, results), judged
 
 
 def _runs(cell) -> list[str]:
@@ -234,10 +241,14 @@ def _standing(new: pd.DataFrame, old: pd.DataFrame | None) -> str:
     return "old" if runs_new <= runs_old else "both"
 
 
-def carry_forward(new: pd.DataFrame, old: pd.DataFrame) -> tuple[pd.DataFrame, int]:
+def carry_forward(new: pd.DataFrame, old: pd.DataFrame,
+                  at_hand: set | None = None) -> tuple[pd.DataFrame, int]:
     """``(table, kept)``: ``new`` with the rows of an earlier table ``old`` that the runs
     at hand do not supersede: the measurements of runs whose results folders are not given
-    this time (a long run done on another machine). Rows that name runs are matched by
+    this time (a long run done on another machine). An old row all of whose runs are in
+    ``at_hand`` (``study/case`` labels of the runs with results now) has been judged again
+    and goes, whatever ``new`` says of it (a changed reference can leave a study out of
+    a trend, or its runs short of a fit). Rows that name runs are matched by
     ``id`` and the studies they draw on, and :func:`_standing` chooses between them; an
     old ``value`` row that shares no run with the new rows of its ``id`` (another variant
     of a study now partly rerun) is kept as it is; a row
@@ -247,7 +258,8 @@ def carry_forward(new: pd.DataFrame, old: pd.DataFrame) -> tuple[pd.DataFrame, i
         return frozenset(run.split("/")[0] for run in _runs(cell))
 
     old = old.astype(object).reindex(columns=new.columns)
-    old = old[[bool(_runs(r)) for r in old["runs"]]]
+    old = old[[bool(_runs(r)) and not (at_hand is not None and set(_runs(r)) <= at_hand)
+               for r in old["runs"]]]
     at_hand: dict = {}  # id -> the runs its new rows draw on
     for ident, cell_ in zip(new["id"], new["runs"]):
         at_hand.setdefault(ident, set()).update(_runs(cell_))

@@ -308,6 +308,22 @@ def test_a_fit_over_the_papers_aspect_ratios_waits_for_all_of_them():
     assert out.verdict == "agrees" and "fit over alpha = 0.001, 0.003, 0.01, 0.03" in out.note
 
 
+def test_a_fit_of_runs_under_other_conditions_says_so_and_gives_ours():
+    """The study has every aspect ratio of the fit, but under another rod contact rule
+    than the paper's: ``conditions differ`` with its fit beside it, not ``not run``."""
+    over = "0.001;0.003;0.01;0.03"
+    row = {**fit_ref("z_j_bonds_fit_exponent", 0.68, 0.13), "over": over,
+           "conditions": "dimension=2; rod_contact=end_bonds_distinct"}
+    runs, res = fit_data([0.001, 0.003, 0.01, 0.03])
+    res["observable"] = "z_j_bonds"
+    out = match(refs(row), runs.assign(rod_contact="end_bonds"), res).iloc[0]
+    assert out.verdict == ("conditions differ: rod_contact (ours end_bonds, paper "
+                           "end_bonds_distinct)")
+    assert out.ours == pytest.approx(0.68, abs=0.05) and np.isnan(out.diff_sigma)
+    out = match(refs(row), runs.assign(rod_contact="end_bonds_distinct"), res).iloc[0]
+    assert out.verdict == "agrees"
+
+
 def test_a_fit_that_does_not_determine_its_parameter_is_unresolved():
     """Points that a power law with an offset cannot pin down (one of them far off the
     curve, one seed each) give an exponent with an error larger than itself: no verdict."""

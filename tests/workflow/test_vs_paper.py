@@ -1,5 +1,6 @@
 """vs_paper.csv from results folders, the study notebooks' verdict blocks, and the
 repository's reference tables."""
+import copy
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +25,15 @@ def test_case_terms():
     t = case_terms(CASE_2D)
     assert t["family"] == "jamming_2d" and t["alpha"] == 1.0 and t["d"] == 2.0
     assert t["bidisperse"] == 1.4 and t["container"] == "periodic" and t["rate"] == 1e-6
+    assert t["rod_contact"] == "closest" and t["compress_contact"] == "closest"
+    paper_law = copy.deepcopy(CASE_2D)
+    paper_law["contact"]["spine_contact"] = "end_bonds_distinct"
+    paper_law["protocol"]["compress_spine_contact"] = "closest"
+    t = case_terms(paper_law)
+    assert t["rod_contact"] == "end_bonds_distinct" and t["compress_contact"] == "closest"
+    paper_law["particles"]["aspect_ratio"] = 0.0  # disks have no spine: no rule to check
+    t = case_terms(paper_law)
+    assert np.isnan(t["rod_contact"]) and np.isnan(t["compress_contact"])
     t = case_terms(CASE_TAP)
     assert t["family"] == "tapping" and t["e_n"] == 0.4 and t["Gamma"] == 2.0
     assert t["tap"] == 1000 and t["sigma"] == 0.0 and t["container"] == "cylinder"
@@ -125,6 +135,14 @@ def test_keep_carries_the_earlier_answers_that_these_results_do_not_give(tmp_pat
     got, n = carry_forward(pd.read_csv(tmp_path / "new.csv"), earlier)
     assert n == 0 and list(got.verdict) == ["not run", "differs"]
     assert list(got.runs) == ["tapping_x/an6", "elsewhere/an9"]
+    # an old verdict whose runs were all judged again goes, even where the new table has
+    # no row for its study (a changed reference left the study out of a trend)
+    earlier.loc[0, ["verdict", "runs"]] = ["agrees", "other_study/an6"]
+    got, n = carry_forward(pd.read_csv(tmp_path / "new.csv"), earlier,
+                           at_hand={"other_study/an6", "tapping_x/an6"})
+    assert n == 0 and list(got.runs) == ["tapping_x/an6", "elsewhere/an9"]
+    got, n = carry_forward(pd.read_csv(tmp_path / "new.csv"), earlier, at_hand={"tapping_x/an6"})
+    assert n == 1 and "other_study/an6" in set(got.runs)
     assert main(["--references", str(refs), "--results", str(empty), "--out", str(out),
                  "--keep", str(tmp_path / "none.csv")]) == 2
 

@@ -44,11 +44,11 @@ def main(argv=None) -> int:
     if a.out is None and a.docs is None:
         ap.error("give --out, --docs or both")
     try:
-        table = vs_paper(a.references, a.results)
+        table, judged = vs_paper(a.references, a.results)
         if a.keep is not None:
             if not a.keep.is_file():
                 raise ConfigError(f"--keep {a.keep}: no such file (give an earlier vs_paper.csv)")
-            table, kept = carry_forward(table, pd.read_csv(a.keep))
+            table, kept = carry_forward(table, pd.read_csv(a.keep), judged)
             print(f"kept {kept} rows of {a.keep} whose studies these results do not answer",
                   file=sys.stderr)
     except (ReferenceError, ConfigError) as exc:
