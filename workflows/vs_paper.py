@@ -260,13 +260,13 @@ def carry_forward(new: pd.DataFrame, old: pd.DataFrame,
     old = old.astype(object).reindex(columns=new.columns)
     old = old[[bool(_runs(r)) and not (at_hand is not None and set(_runs(r)) <= at_hand)
                for r in old["runs"]]]
-    at_hand: dict = {}  # id -> the runs its new rows draw on
+    drawn: dict = {}  # id -> the runs its new rows draw on
     for ident, cell_ in zip(new["id"], new["runs"]):
-        at_hand.setdefault(ident, set()).update(_runs(cell_))
+        drawn.setdefault(ident, set()).update(_runs(cell_))
     earlier: dict = {}  # id -> studies -> old row labels
     for i, r in old.iterrows():
         key = studies(r["runs"])
-        if r.get("kind") == "value" and not at_hand.get(r["id"], set()) & set(_runs(r["runs"])):
+        if r.get("kind") == "value" and not drawn.get(r["id"], set()) & set(_runs(r["runs"])):
             # a value measured on other variants than those at hand: nothing supersedes it
             key = frozenset(_runs(r["runs"]))
         earlier.setdefault(r["id"], {}).setdefault(key, []).append(i)
