@@ -63,7 +63,7 @@ def save(sim: Simulation, path, extra: dict | None = None) -> Path:
         "state": {"dimension": s.dimension, "density": s.density, "step": s.step, "time": s.time},
         "sim": {"dt": sim._dt, "t_seg": sim._t_seg, "s_seg": sim._s_seg, "skin": sim.skin,
                 "max_overlap": sim.max_overlap, "pe": sim._pe, "nc": sim._nc, "nw": sim._nw,
-                "rebuilds": sim.rebuilds, "n_walls": sim.n_walls},
+                "rebuilds": sim.rebuilds, "n_walls": sim.n_walls, "integrator": sim.integrator},
         "model": asdict(sim.model),
         "extra": extra or {},
     }
@@ -114,6 +114,7 @@ def load(path) -> tuple[Simulation, dict]:
     sim.skin, sim.max_overlap = m["skin"], m["max_overlap"]
     sim._pe, sim._nc, sim._nw, sim.rebuilds = m["pe"], m["nc"], m["nw"], m["rebuilds"]
     sim.n_walls = m["n_walls"]
+    sim.integrator = m.get("integrator", "verlet")  # earlier checkpoints: velocity Verlet
     sim._cp = sim.model.pair_params()
     sim._wp = sim.model.wall_params()
     sim._wfriction = sim._wp[4] > 0

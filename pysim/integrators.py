@@ -1,6 +1,6 @@
-"""Time integration kernels: velocity Verlet with rotation, overdamped Heun, FIRE.
+"""Time integration kernels: velocity Verlet with rotation, Euler, overdamped Heun, FIRE.
 
-All three share :func:`forces` (contacts, walls, gravity, drag) and
+All of them share :func:`forces` (contacts, walls, gravity, drag) and
 :func:`maybe_rebuild` (the Verlet list). Arrays are those of :class:`pysim.state.State`
 plus ``half = L/2`` and ``r_int = R + L/2 + d_c/2`` (interaction radii); three tuples of
 arrays travel together: ``pairs`` (:data:`PAIR_ARRAYS`, the Verlet list of
@@ -28,6 +28,13 @@ enters no force, torque or kinetic term (LAMMPS ``nve/sphere`` does not track it
 4. ``v += dt/2 F/m``, ``omega += dt/2 I^-1 tau``
 5. box ``L_k *= exp(eps_k dt)`` with ``x_k`` remapped affinely; particles grow by
    ``exp(g dt)`` (``R``, ``L``; mass ``* exp(3 g dt)``, inertia ``* exp(5 g dt)``)
+
+**Euler** (``euler_chunk``; Pournin et al. 2005 integrate with "the forward Euler
+method"): explicit, every update from the old state (``x += dt v``, free rotation at the
+old ``I omega``, then ``v += dt F/m``, ``I omega += dt tau``), or semi-implicit (the
+velocities first, then the positions and orientations with them); then the list check
+and ``F, tau`` at the new state. The explicit step adds energy to a damped contact
+(docs/studies/tapping.md).
 
 **Overdamped Heun** (``heun_chunk``; science.md, 2-D compression): mobility against an
 affinely contracting substrate, ``F - k_d a_i (dr/dt + kappa r) = 0`` and
@@ -688,6 +695,84 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
     if nsteps > 0:
         _second_half(x, v, omega, u, f, torque, mass, inertia, inv, radius, half, r_int, h, scale,
                      deform, sc, sc3, sc5)
+    return pairs, pe, nc, nw, rebuilds, done
+
+
+@pnjit
+def _euler_step(x, v, q, u, omega, f, torque, inertia, inv, half, box, periodic, dt, dim2):
+    """One explicit (forward) Euler step for every particle: ``x += dt v`` and the free
+    rotation of the rods over ``dt`` at their old angular momentum ``L``, then
+    ``v += dt F/m`` and ``L += dt tau`` (``omega = I^-1 L`` about the new axis), all
+    from the old state; wrap. In 2-D kept in the plane as in :func:`_first_half`."""
+    b0, b1, b2 = box[0], box[1], box[2]
+    p0, p1, p2 = periodic[0], periodic[1], periodic[2]
+    for i in prange(x.shape[0]):
+        v0, v1, v2 = v[i, 0], v[i, 1], v[i, 2]
+        x0 = x[i, 0] + dt * v0
+        x1 = x[i, 1] + dt * v1
+        x2 = x[i, 2] + dt * v2
+        w0, w1, w2 = omega[i, 0], omega[i, 1], omega[i, 2]
+        rp = inv[i, 1]
+        ra = inv[i, 2]
+        if half[i] > 0.0:
+            (q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2], w0, w1,
+             w2) = _turn(q[i, 0], q[i, 1], q[i, 2], q[i, 3], u[i, 0], u[i, 1], u[i, 2], w0, w1,
+                         w2, inertia[i, 0], inertia[i, 1], rp, ra, dt, dim2)
+        v0, v1, v2, w0, w1, w2 = kick(v0, v1, v2, w0, w1, w2, f[i, 0], f[i, 1], f[i, 2],
+                                      torque[i, 0], torque[i, 1], torque[i, 2], u[i, 0], u[i, 1],
+                                      u[i, 2], inv[i, 0], rp, ra, dt)
+        if dim2:
+            v2 = 0.0
+            x2 = 0.0
+            w0 = 0.0
+            w1 = 0.0
+        v[i, 0] = v0
+        v[i, 1] = v1
+        v[i, 2] = v2
+        omega[i, 0] = w0
+        omega[i, 1] = w1
+        omega[i, 2] = w2
+        x[i, 0], x[i, 1], x[i, 2] = _wrap3(x0, x1, x2, b0, b1, b2, p0, p1, p2)
+
+
+@njit
+def euler_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia, box,
+                periodic, pairs, ref, law, cp, friction, walls, wfriction, params, cache, clock,
+                dt, nsteps, virial, dl, own, explicit):
+    """Advance ``nsteps`` Euler steps, explicit (``explicit``: :func:`_euler_step`) or
+    semi-implicit (velocities first, ``v += dt F/m``, ``omega += dt I^-1 tau``, then the
+    positions and orientations with the new ones: :func:`_first_half` with a whole step),
+    each followed by the list check and the forces at the new state (the tangential
+    springs grow inside the force pass, as in :func:`verlet_chunk`). The arguments,
+    returns and contract of :func:`verlet_chunk`, without box deformation or growth."""
+    prm = params[0]
+    inv = np.empty((x.shape[0], 3))
+    inverses(mass, inertia, inv)
+    dim2 = prm.dim2
+    pe = 0.0
+    nc = 0
+    nw = 0
+    rebuilds = 0
+    done = nsteps
+    for k in range(nsteps):
+        t = clock[0] + (clock[2] + k + 1 - clock[1]) * dt
+        if explicit:
+            _euler_step(x, v, q, u, omega, f, torque, inertia, inv, half, box, periodic, dt,
+                        dim2)
+        else:
+            _first_half(x, v, q, u, omega, f, torque, inertia, inv, half, box, periodic, dt,
+                        dt, dim2)
+        pairs, rebuilt = maybe_rebuild(x, u, box, periodic, r_int, half, params, cache, pairs,
+                                       ref, dl)
+        last = (rebuilt and pairs[1].shape[0] >= RETURN_PAIRS) or k == nsteps - 1
+        if rebuilt:
+            rebuilds += 1
+        pe, nc, nw = forces(x, v, omega, u, radius, half, mass, box, periodic, pairs, law, cp,
+                            friction, walls, wfriction, params, cache, t, dt, f, torque, virial,
+                            last, dl, own)
+        if last:
+            done = k + 1
+            break
     return pairs, pe, nc, nw, rebuilds, done
 
 

@@ -154,6 +154,18 @@ class Thermo:
                 self.n_contacts)
 
 
+#: the schemes of :meth:`Simulation.run`: velocity Verlet, explicit (forward) Euler and
+#: semi-implicit Euler (:mod:`pysim.integrators`)
+INTEGRATORS = ("verlet", "euler", "semi_implicit_euler")
+
+
+def check_integrator(name: str) -> None:
+    """Raise ValueError unless ``name`` is one of :data:`INTEGRATORS`."""
+    if name not in INTEGRATORS:
+        raise ValueError(f"unknown integrator {name!r}; valid: "
+                         + ", ".join(repr(k) for k in INTEGRATORS))
+
+
 class BlowUpError(FloatingPointError):
     """The integration became unstable; the message says where and what to change."""
 
@@ -164,7 +176,8 @@ class Simulation:
     ``dt`` time step; ``gravity`` (3,) acceleration; ``planes``/``cylinders`` wall rows
     (:mod:`pysim.walls`); ``skin`` Verlet skin (default 0.2 of the largest diameter);
     ``max_overlap`` the overlap (fraction of the smaller diameter) that counts as a
-    blow-up.
+    blow-up; ``integrator`` the scheme of :meth:`run`, one of :data:`INTEGRATORS`
+    (velocity Verlet by default; :mod:`pysim.integrators`).
 
     The kernels' scalars are two records (:mod:`pysim.records`): ``params``, the
     parameters (drags, gravity, strain and growth rates, skin, threads), and ``cache``,
@@ -173,9 +186,11 @@ class Simulation:
 
     def __init__(self, state: State, model: ContactModel, dt: float, gravity=(0.0, 0.0, 0.0),
                  planes=(), cylinders=(), skin: float | None = None, max_overlap: float = 0.25,
-                 check_dt: bool = True):
+                 check_dt: bool = True, integrator: str = "verlet"):
         if not dt > 0:
             raise ValueError(f"dt must be > 0, got {dt}")
+        check_integrator(integrator)
+        self.integrator = integrator
         model.check_dimension(state.dimension)
         self.state = state
         self.model = model
@@ -358,10 +373,14 @@ class Simulation:
 
     # -- public API --------------------------------------------------------------------
     def run(self, nsteps: int, strain_rate=0.0, growth_rate: float = 0.0):
-        """Advance ``nsteps`` velocity-Verlet steps. ``strain_rate`` (scalar or 3 values,
-        1/time) scales periodic box edges as ``L(t) = L(0) exp(rate t)``; ``growth_rate``
-        grows every particle as ``exp(g t)`` at fixed aspect ratio."""
+        """Advance ``nsteps`` steps of the simulation's integrator (velocity Verlet by
+        default). ``strain_rate`` (scalar or 3 values, 1/time) scales periodic box edges
+        as ``L(t) = L(0) exp(rate t)``; ``growth_rate`` grows every particle as
+        ``exp(g t)`` at fixed aspect ratio (both velocity Verlet only)."""
         if nsteps <= 0:
+            return
+        if self.integrator != "verlet":
+            self._run_euler(int(nsteps), strain_rate, growth_rate)
             return
         s = self.state
         rate = np.broadcast_to(np.asarray(strain_rate, dtype=np.float64), (3,)).copy()
@@ -384,6 +403,29 @@ class Simulation:
         if growth_rate:
             s.length[:] = 2.0 * self.half
         self._check("velocity Verlet")
+
+    def _run_euler(self, nsteps: int, strain_rate, growth_rate: float):
+        """:meth:`run` with an Euler scheme (:func:`pysim.integrators.euler_chunk`)."""
+        if np.any(np.asarray(strain_rate) != 0) or growth_rate:
+            raise ValueError(f"the {self.integrator} integrator has no box deformation or "
+                             "growth; use integrator 'verlet'")
+        s = self.state
+        self.params["strain_rate"] = 0.0
+        self.params["growth"] = 0.0
+        self._sync_threads()
+        left = nsteps
+        while left > 0:  # a call returns after a list rebuild: the old list is freed here
+            (pairs, self._pe, self._nc, self._nw, nreb, done) = itg.euler_chunk(
+                s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half,
+                self.r_int, s.mass, s.inertia, s.box, s.periodic, self._pairs(), self._ref(),
+                self.model.law_id, self._cp, self.model.friction, self._walls(),
+                self._wfriction, self.params, self.cache, self._clock(), self.dt, left,
+                self.virial, self._dl, self._own, self.integrator == "euler")
+            self._set_pairs(pairs)
+            self.rebuilds += nreb
+            self._advance_clock(done)
+            left -= done
+        self._check(self.integrator.replace("_", " "))
 
     def run_overdamped(self, nsteps: int, k_d: float, kappa: float = 0.0):
         """Advance ``nsteps`` overdamped Heun steps with substrate drag ``k_d`` while the

@@ -28,6 +28,10 @@ same steps. ``thermo.dat`` rows every ``thermo_every`` steps carry ``phi`` and
 ``pressure`` as ``nan`` (a container has no box packing fraction; the analysis measures
 the filled part of the cylinder).
 
+Every stage steps with ``protocol.integrator`` (velocity Verlet by default; ``euler``,
+the paper's forward Euler read literally, or ``semi_implicit_euler``:
+:mod:`pysim.integrators`).
+
 Positions in the files are absolute (the container's frame); the simulation itself
 works relative to the lower box corner. Checkpoints and ``resume`` as in
 :mod:`pysim.protocols.compress`: the stage follows from the step number, so a resumed run
@@ -164,7 +168,8 @@ def simulation_from_case(case: dict, init: dict) -> Simulation:
     cyl = walls.cylinder(-lo[0], -lo[1], 0.5 * case["container"]["diameter"])
     return Simulation(state, model, dt=case["protocol"]["dt"], gravity=(0.0, 0.0, -case["gravity"]),
                       planes=[base], cylinders=[cyl], skin=0.2 * 2.0 * float(np.max(state.radius)),
-                      max_overlap=max_overlap(case))
+                      max_overlap=max_overlap(case),
+                      integrator=case["protocol"].get("integrator", "verlet"))
 
 
 def set_stage(sim: Simulation, tp: TapPlan, drag: tuple[float, float]):

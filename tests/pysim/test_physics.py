@@ -380,3 +380,104 @@ def test_sphere_launched_sliding_rolls_off_and_the_kept_spring_undoes_its_slip(s
     else:
         assert abs(slip) < mu * m * g / (2 / 7 * kn)
         assert s.min() < -0.8 * V0
+
+
+def euler_pair(k, gamma, v0, dt, explicit, nmax=2000):
+    """NumPy reference of :func:`tests.pysim.helpers.two_spheres` under the linear law
+    ``f = k delta + gamma delta'`` stepped with explicit or semi-implicit Euler; returns
+    (steps in contact, relative speed after separation)."""
+    m = np.pi / 6
+    x = np.array([2.0, 3.0 + 1e-9])
+    v = np.array([v0, -v0])
+
+    def force(x, v):
+        delta = 1.0 - (x[1] - x[0])
+        fn = k * delta + gamma * (v[0] - v[1]) if delta > 0 else 0.0
+        return np.array([-fn, fn]), delta > 0
+    f, _ = force(x, v)
+    steps = 0
+    for _ in range(nmax):
+        if explicit:
+            x, v = x + dt * v, v + dt * f / m
+        else:
+            v = v + dt * f / m
+            x = x + dt * v
+        f, touching = force(x, v)
+        if touching:
+            steps += 1
+        elif steps:
+            return steps, v[1] - v[0]
+    raise AssertionError("no separation")
+
+
+@pytest.mark.parametrize("integrator", ["euler", "semi_implicit_euler"])
+@pytest.mark.parametrize("e_n", [0.4, 0.8])
+def test_euler_collision_follows_the_numpy_euler_step(integrator, e_n):
+    """Two spheres at dt = t_c/30 (Pournin et al.'s step) under pysim's Euler schemes
+    collide as a NumPy Euler integration of the same law, to rounding; the explicit
+    scheme restitutes more than the nominal e_n, the semi-implicit one about e_n."""
+    k, v0, m_eff = 1e5, 0.5, np.pi / 12
+    zeta = -np.log(e_n) / np.sqrt(np.pi ** 2 + np.log(e_n) ** 2)
+    gamma = 2 * zeta * np.sqrt(m_eff * k)
+    dt = np.pi / np.sqrt(k / m_eff - (gamma / (2 * m_eff)) ** 2) / 30
+    sim = two_spheres(v0, ContactModel("hooke", k, gamma), dt)
+    sim.integrator = integrator
+    t_contact, v_after = collide(sim, 2000)
+    steps, v_ref = euler_pair(k, gamma, v0, dt, integrator == "euler")
+    assert v_after == pytest.approx(v_ref, rel=1e-9)
+    assert t_contact == pytest.approx(steps * dt, rel=1e-9)
+    e = v_after / (2 * v0)
+    if integrator == "euler":
+        assert e > e_n + 0.04
+    else:
+        assert e == pytest.approx(e_n, abs=0.02)
+
+
+@pytest.mark.parametrize("integrator", ["euler", "semi_implicit_euler"])
+def test_euler_step_of_a_rod_on_a_frictional_floor(integrator):
+    """One step of a tilted, spinning, sliding rod touching a frictional floor: explicit
+    Euler moves it with the old velocities, semi-implicit with the new; both give
+    ``v + dt F/m`` and the angular momentum ``I omega + dt tau`` (about the new axis),
+    the axis turning freely at the angular momentum the scheme moves it with."""
+    from pysim.integrators import free_step
+    tilt = np.radians(35)
+    st = State.create(np.array([[5.0, 5.0, 1.35]]), 0.5, 3.0, np.array([10.0, 10.0, 20.0]),
+                      axis=np.array([[np.cos(tilt), 0.0, np.sin(tilt)]]),
+                      v=np.array([[0.3, -0.2, -0.5]]), periodic=(True, True, False))
+    st.omega[:] = [[0.4, 1.1, -0.7]]
+    model = ContactModel("hooke", 2e5, 550.0, k_t=5e4, gamma_t=10.0, mu=0.5)
+    sim = Simulation(st, model, dt=2e-5, gravity=(0, 0, -10),
+                     planes=[plane((0, 0, 1), (0, 0, 0))], integrator=integrator)
+    assert len(sim.wall_contact_table()[0]) == 1
+    dt, m = sim.dt, st.mass[0]
+    ip, ia = st.inertia[0]
+    x0, v0, w0, u0, q0 = (a[0].copy() for a in (st.x, st.v, st.omega, st.u, st.q))
+    f0, t0 = sim.f[0].copy(), sim.torque[0].copy()
+    assert np.linalg.norm(t0) > 0
+
+    def ang(w, u):
+        return ip * w + (ia - ip) * np.dot(w, u) * u
+
+    def inv_ang(lv, u):
+        return lv / ip + (1 / ia - 1 / ip) * np.dot(lv, u) * u
+    sim.run(1)
+    v1 = v0 + dt * f0 / m
+    l1 = ang(w0, u0) + dt * t0
+    if integrator == "euler":
+        x1, w_turn = x0 + dt * v0, w0
+    else:
+        x1, w_turn = x0 + dt * v1, inv_ang(l1, u0)
+    turned = free_step(*q0, *u0, *w_turn, ip, ia, 1 / ip, 1 / ia, dt)
+    assert st.x[0] == pytest.approx(x1, rel=1e-12, abs=1e-14)
+    assert st.v[0] == pytest.approx(v1, rel=1e-12, abs=1e-14)
+    assert st.u[0] == pytest.approx(np.array(turned[4:7]), rel=1e-12, abs=1e-14)
+    assert ang(st.omega[0], st.u[0]) == pytest.approx(l1, rel=1e-10, abs=1e-14)
+
+
+def test_euler_integrators_refuse_deformation_and_unknown_names():
+    sim = two_spheres(0.5, ContactModel("hooke", 1e5, 1.0), 1e-4)
+    sim.integrator = "euler"
+    with pytest.raises(ValueError, match="no box deformation or growth; use integrator 'verlet'"):
+        sim.run(1, strain_rate=1e-3)
+    with pytest.raises(ValueError, match=r"unknown integrator 'rk4'; valid: 'verlet', 'euler'"):
+        Simulation(sim.state, sim.model, dt=1e-4, integrator="rk4")

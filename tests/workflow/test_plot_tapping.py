@@ -131,8 +131,9 @@ def test_set_labels_name_a_changed_tangential_law_and_the_clip():
     assert set_label(clipped).endswith("\nf_n >= 0")
     paper = validate_case(deep_merge(TAP, {
         "contact": {"tangential_spring": "keep"},
-        "protocol": {"preparation": {"mode": "free", "ke_stop": 1e-8, "max_time": 2.0}}}))
-    assert set_label(paper).endswith("\nspring kept, free settling")
+        "protocol": {"preparation": {"mode": "free", "ke_stop": 1e-8, "max_time": 2.0},
+                     "integrator": "euler"}}))
+    assert set_label(paper).endswith("\nspring kept, free settling, euler")
 
 
 def test_snapshots_at_the_papers_taps_show_a_short_runs_last_frame_once(monkeypatch, tmp_path):

@@ -235,11 +235,16 @@ def test_paper_variants_validate_and_run_on_pysim_only():
     plain = validate_case(tap_case(), "case.yaml")
     assert "tangential_spring" not in plain["contact"]  # absent means reset: the same case
     assert "preparation" not in plain["protocol"]
+    assert "integrator" not in plain["protocol"]
     keep = validate_case(tap_case(contact__tangential_spring="keep"), "case.yaml")
     free = validate_case(tap_case(protocol__preparation=dict(FREE)), "case.yaml")
     assert free["protocol"]["preparation"]["check_time"] == pytest.approx(0.25 / 30.0)
+    euler = validate_case(tap_case(protocol__integrator="euler"), "case.yaml")
+    verlet = validate_case(tap_case(protocol__integrator="verlet"), "case.yaml")
+    assert supports("lammps", verlet) is None
     for case, key in ((keep, "contact.tangential_spring = keep"),
-                      (free, "protocol.preparation.mode = free")):
+                      (free, "protocol.preparation.mode = free"),
+                      (euler, "protocol.integrator = euler")):
         assert supports("pysim", case) is None
         for engine in ("lammps", "liggghts"):
             assert key in supports(engine, case)
@@ -272,6 +277,9 @@ def test_paper_variants_validate_and_run_on_pysim_only():
      r"protocol\.preparation\.ke_stop = 0\.0 is not allowed; use a number > 0"),
     ({"protocol__preparation": {"mode": "still"}},
      r"protocol\.preparation\.mode = 'still' is not allowed; use one of 'capped', 'free'"),
+    ({"protocol__integrator": "rk4"},
+     r"protocol\.integrator = 'rk4' is not allowed; use one of 'verlet', 'euler', "
+     r"'semi_implicit_euler'"),
 ])
 def test_bad_paper_variants(changes, message):
     with pytest.raises(ConfigError, match=message) as exc:

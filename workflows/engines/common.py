@@ -113,8 +113,18 @@ def capped_preparation(engine: str, case: dict) -> str | None:
     return None
 
 
+def verlet_steps(engine: str, case: dict) -> str | None:
+    """The peers' inertial decks step with velocity Verlet (their own integrators)."""
+    scheme = case["protocol"].get("integrator", "verlet")
+    if scheme in ("euler", "semi_implicit_euler"):
+        return (f"{engine} steps with velocity Verlet; protocol.integrator = {scheme} is "
+                "pysim's only")
+    return None
+
+
 #: what every peer engine refuses, checked in this order before its deck is looked up
-PEER_LIMITS = (closest_contacts_only, reset_tangential_spring, capped_preparation)
+PEER_LIMITS = (closest_contacts_only, reset_tangential_spring, capped_preparation,
+               verlet_steps)
 
 
 def inertial_only(engine: str, case: dict) -> str | None:

@@ -76,8 +76,9 @@ def set_label(case: dict) -> str:
     third line for what else sets it apart: a tangential law other than the one the
     schema derives from the normal law (``k_t = 2/7 k_n``, ``gamma_t = gamma_n / 2``),
     given as ratios to those, ``f_n >= 0`` for ``contact.limit_damping``, ``spring
-    kept`` for ``contact.tangential_spring: keep`` and ``free settling`` for
-    ``protocol.preparation.mode: free``."""
+    kept`` for ``contact.tangential_spring: keep``, ``free settling`` for
+    ``protocol.preparation.mode: free`` and the scheme for an Euler
+    ``protocol.integrator``."""
     c = case["contact"]
     label = (f"e_n {c.get('restitution', float('nan')):g}, "
              f"Gamma {case['protocol']['intensity']:g}\n"
@@ -95,6 +96,9 @@ def set_label(case: dict) -> str:
         extra.append("spring kept")
     if case["protocol"].get("preparation", {}).get("mode") == "free":
         extra.append("free settling")
+    scheme = case["protocol"].get("integrator", "verlet")
+    if scheme != "verlet":
+        extra.append(scheme.replace("_", " "))
     return label + ("\n" + ", ".join(extra) if extra else "")
 
 
