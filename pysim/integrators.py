@@ -626,6 +626,24 @@ def _turn_rows(T, m, rows, q, u, omega, inertia, inv, dt, dim2):
 RETURN_PAIRS = 1 << 13
 
 
+@inline_njit
+def _list_and_forces(x, v, omega, u, radius, half, r_int, mass, box, periodic, pairs, ref, law,
+                     cp, friction, walls, wfriction, params, cache, t, dt, f, torque, virial, dl,
+                     own, final):
+    """The second part of a step of :func:`verlet_chunk` and :func:`euler_chunk`: the list
+    check (:func:`maybe_rebuild`), then the forces at the new state, with the global sums
+    on the call's last step (``final``, or the step whose rebuild returns the call, see
+    :data:`RETURN_PAIRS`). Returns ``(pairs, rebuilt (1 or 0), last, energy, pair contacts,
+    wall contacts)``."""
+    pairs, rebuilt = maybe_rebuild(x, u, box, periodic, r_int, half, params, cache, pairs,
+                                   ref, dl)
+    last = (rebuilt and pairs[1].shape[0] >= RETURN_PAIRS) or final
+    pe, nc, nw = forces(x, v, omega, u, radius, half, mass, box, periodic, pairs, law, cp,
+                        friction, walls, wfriction, params, cache, t, dt, f, torque, virial,
+                        last, dl, own)
+    return pairs, 1 if rebuilt else 0, last, pe, nc, nw
+
+
 @njit
 def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia, box,
                  periodic, pairs, ref, law, cp, friction, walls, wfriction, params, cache, clock,
@@ -679,14 +697,11 @@ def verlet_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inerti
             _half_and_half(x, v, q, u, omega, f, torque, mass, inertia, inv, radius, half, r_int,
                            box, periodic, h, dt, dim2, scale, deform, sc, sc3, sc5, parts,
                            lanes)
-        pairs, rebuilt = maybe_rebuild(x, u, box, periodic, r_int, half, params, cache, pairs,
-                                       ref, dl)
-        last = (rebuilt and pairs[1].shape[0] >= RETURN_PAIRS) or k == nsteps - 1
-        if rebuilt:
-            rebuilds += 1
-        pe, nc, nw = forces(x, v, omega, u, radius, half, mass, box, periodic, pairs, law, cp,
-                            friction, walls, wfriction, params, cache, t, dt, f, torque, virial,
-                            last, dl, own)
+        pairs, rebuilt, last, pe, nc, nw = _list_and_forces(
+            x, v, omega, u, radius, half, r_int, mass, box, periodic, pairs, ref, law, cp,
+            friction, walls, wfriction, params, cache, t, dt, f, torque, virial, dl, own,
+            k == nsteps - 1)
+        rebuilds += rebuilt
         for kk in range(3):
             box[kk] *= scale[kk]
         if last:
@@ -726,12 +741,8 @@ def _euler_step(x, v, q, u, omega, f, torque, inertia, inv, half, box, periodic,
             x2 = 0.0
             w0 = 0.0
             w1 = 0.0
-        v[i, 0] = v0
-        v[i, 1] = v1
-        v[i, 2] = v2
-        omega[i, 0] = w0
-        omega[i, 1] = w1
-        omega[i, 2] = w2
+        v[i, 0], v[i, 1], v[i, 2] = v0, v1, v2
+        omega[i, 0], omega[i, 1], omega[i, 2] = w0, w1, w2
         x[i, 0], x[i, 1], x[i, 2] = _wrap3(x0, x1, x2, b0, b1, b2, p0, p1, p2)
 
 
@@ -762,14 +773,11 @@ def euler_chunk(x, v, q, u, omega, f, torque, radius, half, r_int, mass, inertia
         else:
             _first_half(x, v, q, u, omega, f, torque, inertia, inv, half, box, periodic, dt,
                         dt, dim2)
-        pairs, rebuilt = maybe_rebuild(x, u, box, periodic, r_int, half, params, cache, pairs,
-                                       ref, dl)
-        last = (rebuilt and pairs[1].shape[0] >= RETURN_PAIRS) or k == nsteps - 1
-        if rebuilt:
-            rebuilds += 1
-        pe, nc, nw = forces(x, v, omega, u, radius, half, mass, box, periodic, pairs, law, cp,
-                            friction, walls, wfriction, params, cache, t, dt, f, torque, virial,
-                            last, dl, own)
+        pairs, rebuilt, last, pe, nc, nw = _list_and_forces(
+            x, v, omega, u, radius, half, r_int, mass, box, periodic, pairs, ref, law, cp,
+            friction, walls, wfriction, params, cache, t, dt, f, torque, virial, dl, own,
+            k == nsteps - 1)
+        rebuilds += rebuilt
         if last:
             done = k + 1
             break
