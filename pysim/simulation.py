@@ -189,7 +189,6 @@ class Simulation:
                  check_dt: bool = True, integrator: str = "verlet"):
         if not dt > 0:
             raise ValueError(f"dt must be > 0, got {dt}")
-        check_integrator(integrator)
         self.integrator = integrator
         model.check_dimension(state.dimension)
         self.state = state
@@ -247,6 +246,17 @@ class Simulation:
         self._index_pairs()
         self._rebuild()
         self.compute_forces()
+
+    @property
+    def integrator(self) -> str:
+        """The scheme of :meth:`run`, one of :data:`INTEGRATORS`; setting it checks the
+        name, so that a misspelt one is refused, not run as another scheme."""
+        return self._integrator
+
+    @integrator.setter
+    def integrator(self, name: str):
+        check_integrator(name)
+        self._integrator = name
 
     # -- time --------------------------------------------------------------------------
     @property
@@ -388,18 +398,7 @@ class Simulation:
         self.params["strain_rate"] = rate
         self.params["growth"] = growth_rate
         self._sync_threads()
-        left = int(nsteps)
-        while left > 0:  # a call returns after a list rebuild: the old list is freed here
-            (pairs, self._pe, self._nc, self._nw, nreb, done) = itg.verlet_chunk(
-                s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half,
-                self.r_int, s.mass, s.inertia, s.box, s.periodic, self._pairs(), self._ref(),
-                self.model.law_id, self._cp, self.model.friction, self._walls(),
-                self._wfriction, self.params, self.cache, self._clock(), self.dt, left,
-                self.virial, self._dl, self._own)
-            self._set_pairs(pairs)
-            self.rebuilds += nreb
-            self._advance_clock(done)
-            left -= done
+        self._chunks(itg.verlet_chunk, int(nsteps))
         if growth_rate:
             s.length[:] = 2.0 * self.half
         self._check("velocity Verlet")
@@ -409,23 +408,30 @@ class Simulation:
         if np.any(np.asarray(strain_rate) != 0) or growth_rate:
             raise ValueError(f"the {self.integrator} integrator has no box deformation or "
                              "growth; use integrator 'verlet'")
-        s = self.state
         self.params["strain_rate"] = 0.0
         self.params["growth"] = 0.0
         self._sync_threads()
+        self._chunks(itg.euler_chunk, nsteps, self.integrator == "euler")
+        self._check(self.integrator.replace("_", " "))
+
+    def _chunks(self, kernel, nsteps: int, *extra):
+        """Advance ``nsteps`` steps with an inertial ``kernel`` (:func:`pysim.integrators.
+        verlet_chunk` or ``euler_chunk``, ``extra`` its arguments after the common ones),
+        calling it again after each return at a list rebuild (the old list is freed
+        here)."""
+        s = self.state
         left = nsteps
-        while left > 0:  # a call returns after a list rebuild: the old list is freed here
-            (pairs, self._pe, self._nc, self._nw, nreb, done) = itg.euler_chunk(
+        while left > 0:
+            (pairs, self._pe, self._nc, self._nw, nreb, done) = kernel(
                 s.x, s.v, s.q, s.u, s.omega, self.f, self.torque, s.radius, self.half,
                 self.r_int, s.mass, s.inertia, s.box, s.periodic, self._pairs(), self._ref(),
                 self.model.law_id, self._cp, self.model.friction, self._walls(),
                 self._wfriction, self.params, self.cache, self._clock(), self.dt, left,
-                self.virial, self._dl, self._own, self.integrator == "euler")
+                self.virial, self._dl, self._own, *extra)
             self._set_pairs(pairs)
             self.rebuilds += nreb
             self._advance_clock(done)
             left -= done
-        self._check(self.integrator.replace("_", " "))
 
     def run_overdamped(self, nsteps: int, k_d: float, kappa: float = 0.0):
         """Advance ``nsteps`` overdamped Heun steps with substrate drag ``k_d`` while the

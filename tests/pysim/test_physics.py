@@ -481,3 +481,6 @@ def test_euler_integrators_refuse_deformation_and_unknown_names():
         sim.run(1, strain_rate=1e-3)
     with pytest.raises(ValueError, match=r"unknown integrator 'rk4'; valid: 'verlet', 'euler'"):
         Simulation(sim.state, sim.model, dt=1e-4, integrator="rk4")
+    with pytest.raises(ValueError, match=r"unknown integrator 'Euler'; valid: 'verlet', 'euler'"):
+        sim.integrator = "Euler"
+    assert sim.integrator == "euler"
