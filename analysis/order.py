@@ -11,9 +11,12 @@
 * Angle to the horizontal ``beta = asin|u_v|`` in ``[0, pi/2]``: its histogram
   ``f(beta)`` (isotropic 3-D: ``f = cos beta``), its mean (the mean angle between
   shafts and the bottom plane), globally and in horizontal layers (by centre).
+  Its mode (:func:`orientation_mode`) and the share of standing rods
+  (:func:`standing_fraction`).
 * Radial orientation correlation ``Q(r)``: mean over pairs at centre distance ``r`` of
   ``cos 2(theta_i - theta_j) = 2 (u_i.u_j)^2 - 1`` (2-D) or
-  ``P2(u_i.u_j) = (3 (u_i.u_j)^2 - 1)/2`` (3-D).
+  ``P2(u_i.u_j) = (3 (u_i.u_j)^2 - 1)/2`` (3-D); a peak of it in a window
+  (:func:`correlation_peak`) and its range of values (:func:`correlation_amplitude`).
 """
 from __future__ import annotations
 
@@ -64,6 +67,68 @@ def angle_to_horizontal(frame: Frame, axis: int | None = None) -> np.ndarray:
     horizontal (bottom) plane (radians)."""
     axis = frame.vertical if axis is None else axis
     return np.arcsin(np.clip(np.abs(frame.axis[:, axis]), 0.0, 1.0))
+
+
+#: a rod within this angle (degrees) of the vertical stands; within it of the horizontal it lies
+UPRIGHT_WITHIN = 15.0
+
+
+def orientation_mode(beta, bins: int = 18) -> float:
+    """Most probable angle to the horizontal (degrees): the centre of the fullest of
+    ``bins`` equal bins over ``[0, 90]`` degrees of ``beta`` (radians, in ``[0, pi/2]``;
+    the lowest such bin on a tie)."""
+    beta = np.asarray(beta, dtype=np.float64)
+    if beta.size == 0:
+        raise ValueError("no angles: the most probable orientation is undefined")
+    if bins < 1:
+        raise ValueError(f"bins must be >= 1, got {bins}")
+    count, edges = np.histogram(np.degrees(beta), bins=bins, range=(0.0, 90.0))
+    k = int(np.argmax(count))
+    return float(0.5 * (edges[k] + edges[k + 1]))
+
+
+def standing_fraction(beta, within: float = UPRIGHT_WITHIN) -> float:
+    """Share of rods standing: ``beta`` (radians, angle to the horizontal) within
+    ``within`` degrees of the vertical."""
+    beta = np.asarray(beta, dtype=np.float64)
+    if beta.size == 0:
+        raise ValueError("no angles: the share of standing rods is undefined")
+    return float(np.mean(beta > np.radians(90.0 - within)))
+
+
+def _window(centers, q, lo: float, hi: float):
+    centers, q = np.asarray(centers, dtype=np.float64), np.asarray(q, dtype=np.float64)
+    if not lo < hi:
+        raise ValueError(f"the window needs lo < hi, got [{lo}, {hi}]")
+    keep = (centers >= lo) & (centers <= hi) & np.isfinite(q)
+    return np.flatnonzero(keep)
+
+
+def correlation_peak(centers, q, lo: float, hi: float, err=None) -> float:
+    """Where a correlation ``q(r)`` peaks inside ``[lo, hi]``: the centre of its largest
+    shell there, if that shell is neither the first nor the last of the window and
+    stands above both by more than twice its standard error ``err`` (zero if None);
+    NaN when ``q`` runs up or down through the window, or fewer than 3 shells hold
+    pairs. Same units as ``centers``."""
+    k = _window(centers, q, lo, hi)
+    if len(k) < 3:
+        return float("nan")
+    q = np.asarray(q, dtype=np.float64)
+    top = k[int(np.argmax(q[k]))]
+    margin = 0.0 if err is None else 2.0 * float(np.asarray(err, dtype=np.float64)[top])
+    if top in (k[0], k[-1]) or not q[top] - margin > max(q[k[0]], q[k[-1]]):
+        return float("nan")
+    return float(np.asarray(centers, dtype=np.float64)[top])
+
+
+def correlation_amplitude(centers, q, lo: float, hi: float) -> float:
+    """Height of the highest maximum above the deepest minimum of ``q(r)`` over the
+    shells with centres in ``[lo, hi]`` (empty shells skipped; NaN if none)."""
+    k = _window(centers, q, lo, hi)
+    if len(k) == 0:
+        return float("nan")
+    q = np.asarray(q, dtype=np.float64)[k]
+    return float(q.max() - q.min())
 
 
 def _rods(frame: Frame) -> np.ndarray:
@@ -173,10 +238,12 @@ class OrientationCorrelation(Observable):
 
     Pairs of rods with centre distance below ``r_max`` (minimum image) are binned in
     ``bins`` equal shells. Results: ``edges``, ``centers``, ``q`` (mean per shell, nan
-    where empty), ``counts`` (pairs per shell).
+    where empty), ``q_err`` (its standard error, the spread of the pairs' values over the
+    root of their count: pairs sharing a rod are not independent, so it is a lower
+    bound), ``counts`` (pairs per shell).
     """
 
-    _results = ("edges", "centers", "q", "counts")
+    _results = ("edges", "centers", "q", "q_err", "counts")
 
     def __init__(self, r_max: float, bins: int = 50, rods_only: bool = True):
         if not r_max > 0 or bins < 1:
@@ -194,9 +261,13 @@ class OrientationCorrelation(Observable):
         edges = np.linspace(0.0, self.r_max, self.bins + 1)
         cnt, _ = np.histogram(r, bins=edges)
         tot, _ = np.histogram(r, bins=edges, weights=val)
+        sq, _ = np.histogram(r, bins=edges, weights=val * val)
         with np.errstate(invalid="ignore", divide="ignore"):
             q = np.where(cnt > 0, tot / np.maximum(cnt, 1), np.nan)
-        self._set(edges=edges, centers=0.5 * (edges[1:] + edges[:-1]), q=q, counts=cnt)
+            var = np.clip(sq / np.maximum(cnt, 1) - q * q, 0.0, None) * cnt / (cnt - 1.0)
+            err = np.where(cnt > 1, np.sqrt(var / np.maximum(cnt, 1)), np.nan)
+        self._set(edges=edges, centers=0.5 * (edges[1:] + edges[:-1]), q=q, q_err=err,
+                  counts=cnt)
         return self
 
 

@@ -14,7 +14,9 @@ filled part of a container (science.md section 5).
   grains divided by the volume of the enclosing truncated cylinder (upon elimination of
   outliers)"): ``phi_enc = sum_{i in bed} V_i / (A (z_top - z_bot))`` with ``z_bot`` and
   ``z_top`` the lowest and highest surface points of the bed's grains; outliers are the
-  grains above the first empty horizontal gap (:func:`bed_grains`).
+  grains above the first empty horizontal gap (:func:`bed_grains`);
+* how a slab profile changes with height (:func:`profile_change`), and whether it is
+  uniform (within :data:`UNIFORM_PROFILE`).
 
 The vertical axis is ``z`` in 3-D and ``y`` in 2-D (:attr:`analysis.frame.Frame.vertical`).
 """
@@ -95,6 +97,30 @@ def slab_packing_fraction(frame: Frame, edges, axis: int | None = None,
     if area <= 0:
         raise ValueError(f"area must be > 0, got {area}")
     return slab_measures(frame, edges, axis) / (area * np.diff(edges))
+
+
+#: the largest change of the packing fraction from the base to the top of a deposit (of
+#: the fitted straight line, :func:`profile_change`) that still counts as uniform
+UNIFORM_PROFILE = 0.02
+
+
+def profile_change(heights, phi, top: float, inner=(0.1, 0.9)) -> float:
+    """Change of a packing-fraction profile up a deposit: ``phi`` of slabs centred at
+    ``heights`` above the base, fitted by a straight line in ``y / top`` over the slabs
+    with ``inner[0] <= y / top <= inner[1]`` (leaving out the layer ordered by the base
+    and the loose surface); returns the line's rise across that range,
+    ``slope * (inner[1] - inner[0])`` (positive: denser at the top). NaN with fewer
+    than 3 slabs in the range."""
+    lo, hi = (float(v) for v in inner)
+    if not (0.0 <= lo < hi <= 1.0) or not top > 0:
+        raise ValueError(f"need 0 <= inner[0] < inner[1] <= 1 and top > 0, got {inner}, {top}")
+    y = np.asarray(heights, dtype=np.float64) / top
+    phi = np.asarray(phi, dtype=np.float64)
+    keep = (y >= lo) & (y <= hi) & np.isfinite(phi)
+    if keep.sum() < 3:
+        return float("nan")
+    slope = np.polyfit(y[keep], phi[keep], 1)[0]
+    return float(slope * (hi - lo))
 
 
 def _check_edges(edges) -> np.ndarray:

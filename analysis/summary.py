@@ -612,6 +612,12 @@ def analyse_tapping(run_dir, **plan):
 #: side of the stress elements of a deposit, in particle lengths ``L + D`` (science.md: "square
 #: elements of 5 particle lengths")
 STRESS_ELEMENT = 5.0
+#: a deposit's ``Q(r)`` out to this many particle lengths ``L + D``, in shells of a quarter
+#: of the width ``D``
+ORDER_RANGE = 3.0
+#: the window, in particle lengths, in which ``Q(r)`` may peak for rods touching end to end
+#: (centre distance ``L + D``); the shells nearer than 1.5 widths hold only rods side by side
+END_TO_END = (0.75, 1.25)
 
 
 def _no_saturation(tag: str) -> list[tuple[str, float, float]]:
@@ -674,8 +680,19 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
 
     * ``phi_deposit``: packing fraction of the filled part (grain measure below the top
       surface over ``W^(d-1)`` times the height);
-    * ``angle_mean`` (degrees) and ``flat_fraction`` (spines within 15 degrees of the
-      horizontal);
+    * ``angle_mean`` (degrees), ``flat_fraction`` (spines within 15 degrees of the
+      horizontal), ``standing_fraction`` (within 15 degrees of the vertical) and
+      ``orientation_mode`` (the most probable angle to the horizontal, degrees: the centre
+      of the fullest 5-degree bin, :func:`analysis.order.orientation_mode`);
+    * ``phi_profile_change``: rise of the slab packing fraction from the base to the top
+      (a straight line over the middle 80 % of the height,
+      :func:`analysis.packing.profile_change`), and ``phi_profile_uniform``, 1 when it is
+      within :data:`analysis.packing.UNIFORM_PROFILE`, else 0;
+    * the radial orientation correlation ``Q(r)`` (:data:`ORDER_RANGE`):
+      ``q_r_length_peak``, where it peaks (in widths ``D``) within :data:`END_TO_END`
+      particle lengths, NaN without a peak there (:func:`analysis.order.correlation_peak`),
+      and ``q_r_peak_amplitude``, its highest maximum above its deepest minimum beyond
+      1.5 widths (:func:`analysis.order.correlation_amplitude`);
     * Janssen saturation fits ``sigma(x) = sigma_m (1 - exp(-x / h_s))``, ``x = depth /
       W``, of the vertical stress and of the pressure in slabs of thickness ``slab``
       (compressive positive; fits over slabs with at least 3 grains and a nonzero
@@ -710,8 +727,11 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
     weight).
     """
     from analysis.janssen import JanssenFit, JanssenFitError, janssen
-    from analysis.order import AngleToHorizontal
-    from analysis.packing import FilledPackingFraction, cumulative_measure, slab_packing_fraction
+    from analysis.order import (AngleToHorizontal, OrientationCorrelation,
+                                correlation_amplitude, correlation_peak, orientation_mode,
+                                standing_fraction)
+    from analysis.packing import (UNIFORM_PROFILE, FilledPackingFraction, cumulative_measure,
+                                  profile_change, slab_packing_fraction)
     from analysis.stress import (StressField, StressProfile, major_axis_order,
                                  particle_major_angles, slab_stress_errors)
 
@@ -741,7 +761,13 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
     rows = [("phi_deposit", float(fill.phi), np.nan),
             ("height", float(fill.height), np.nan),
             ("angle_mean", float(ang.mean_deg), np.nan),
-            ("flat_fraction", float(np.mean(ang.angles < np.radians(15.0))), np.nan)]
+            ("flat_fraction", float(np.mean(ang.angles < np.radians(15.0))), np.nan),
+            ("standing_fraction", standing_fraction(ang.angles), np.nan),
+            ("orientation_mode", orientation_mode(ang.angles), np.nan)]
+    change = profile_change(0.5 * (edges[1:] + edges[:-1]), phi_slab, fill.top)
+    rows += [("phi_profile_change", change, np.nan),
+             ("phi_profile_uniform",
+              float(abs(change) <= UNIFORM_PROFILE) if np.isfinite(change) else np.nan, np.nan)]
     for col, tag in (("sigma_vv", "vv"), ("pressure", "p")):
         err = prof.loc[use, "sigma_vv_err"] if tag == "vv" else None
         try:
@@ -773,6 +799,15 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
         kr = (prof.loc[lower, "sigma_hh"] / prof.loc[lower, "sigma_vv"]).to_numpy()
     rows.append(("k_ratio", float(np.nanmean(kr)) if np.isfinite(kr).any() else np.nan, np.nan))
     length = float(np.mean(frame.length + 2.0 * frame.radius))  # particle length L + D
+    width_d = 2.0 * float(np.mean(frame.radius))
+    corr = OrientationCorrelation(ORDER_RANGE * length,
+                                  bins=max(int(round(4 * ORDER_RANGE * length / width_d)), 1)
+                                  ).compute(frame)
+    r = corr.centers / width_d
+    end = [e * length / width_d for e in END_TO_END]
+    rows += [("q_r_length_peak", correlation_peak(r, corr.q, *end, corr.q_err), np.nan),
+             ("q_r_peak_amplitude",
+              correlation_amplitude(r, corr.q, 1.5, ORDER_RANGE * length / width_d), np.nan)]
     field = StressField(STRESS_ELEMENT * length, min_count=3).compute(frame, contacts)
     rows.append(("major_order", field.major_order, np.nan))
     rows.append(("major_order_particles",

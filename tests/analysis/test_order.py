@@ -3,7 +3,9 @@ import numpy as np
 import pytest
 
 from analysis.order import (AngleToHorizontal, NematicOrder, OrientationCorrelation,
-                            OrientationOrder2D, order_parameter_2d, q_tensor)
+                            OrientationOrder2D, correlation_amplitude, correlation_peak,
+                            order_parameter_2d, orientation_mode, q_tensor,
+                            standing_fraction)
 from tests.analysis.helpers import cubic, frame_of, random_unit, square
 
 
@@ -188,3 +190,63 @@ def test_finite_size_order_separates_disorder_from_order(rng):
         pytest.approx(4.0, rel=0.15)
     assert t.loc[(4.0, 4096), "mean_sqrt_n_s2"] / t.loc[(4.0, 256), "mean_sqrt_n_s2"] == \
         pytest.approx(4.0, rel=0.05)
+
+
+def test_orientation_mode_and_standing_fraction():
+    """The mode is the centre of the fullest 5-degree bin; standing means within 15
+    degrees of the vertical."""
+    flat = np.radians([1.0, 2.0, 3.0, 4.0, 7.0, 50.0, 89.0])
+    assert orientation_mode(flat) == pytest.approx(2.5)
+    tilted = np.radians([48.0, 51.0, 52.0, 53.0, 5.0, 88.0])
+    assert orientation_mode(tilted) == pytest.approx(52.5)
+    assert orientation_mode(np.radians([10.0, 80.0])) == pytest.approx(12.5)  # tie: lower
+    assert orientation_mode(np.radians([90.0]), bins=9) == pytest.approx(85.0)
+    assert standing_fraction(np.radians([0.0, 74.0, 76.0, 90.0])) == pytest.approx(0.5)
+    assert standing_fraction(np.radians([0.0, 74.0, 76.0, 90.0]), within=20.0) == 0.75
+    with pytest.raises(ValueError, match="undefined"):
+        orientation_mode([])
+    with pytest.raises(ValueError, match="undefined"):
+        standing_fraction([])
+
+
+def test_correlation_peak_and_amplitude():
+    r = np.arange(0.125, 12.0, 0.25)
+    bump = 0.3 + 0.2 * np.exp(-((r - 5.125) / 0.4) ** 2)
+    assert correlation_peak(r, bump, 3.75, 6.25) == pytest.approx(5.125)
+    # a curve running down through the window has no peak there, nor one with too few shells
+    assert np.isnan(correlation_peak(r, 1.0 / r, 3.75, 6.25))
+    assert np.isnan(correlation_peak(r, bump, 4.9, 5.2))
+    # a bump no taller than twice its standard error is not a peak
+    assert np.isnan(correlation_peak(r, bump, 3.75, 6.25, err=np.full(len(r), 0.15)))
+    assert correlation_peak(r, bump, 3.75, 6.25, err=np.full(len(r), 0.05)) == pytest.approx(5.125)
+    # empty shells are skipped
+    holes = bump.copy()
+    holes[::2] = np.nan
+    assert np.isfinite(correlation_peak(r, holes, 3.75, 6.25))
+    wave = np.cos(r)
+    assert correlation_amplitude(r, wave, 1.5, 11.0) == pytest.approx(2.0, abs=0.01)
+    assert correlation_amplitude(r, wave, 1.5, 2.9) == pytest.approx(
+        np.cos(1.625) - np.cos(2.875))
+    assert np.isnan(correlation_amplitude(r, np.full(len(r), np.nan), 1.5, 11.0))
+    with pytest.raises(ValueError, match="lo < hi"):
+        correlation_amplitude(r, wave, 3.0, 2.0)
+
+
+def test_orientation_correlation_standard_error(rng):
+    """q_err is the standard error of the pairs' values in each shell, computed directly."""
+    n = 300
+    x = np.column_stack([rng.uniform(0, 10, n), rng.uniform(0, 10, n), np.zeros(n)])
+    theta = rng.uniform(0, np.pi, n)
+    fr = rods_2d(x, theta)
+    qc = OrientationCorrelation(r_max=2.0, bins=4).compute(fr)
+    d = x[:, None, :2] - x[None, :, :2]
+    d -= 10.0 * np.round(d / 10.0)
+    r = np.linalg.norm(d, axis=2)
+    val = np.cos(2 * (theta[:, None] - theta[None, :]))
+    iu = np.triu_indices(n, 1)
+    r, val = r[iu], val[iu]
+    for k in range(4):
+        v = val[(r >= qc.edges[k]) & (r < qc.edges[k + 1])]
+        assert qc.counts[k] == len(v)
+        assert qc.q[k] == pytest.approx(v.mean())
+        assert qc.q_err[k] == pytest.approx(v.std(ddof=1) / np.sqrt(len(v)))

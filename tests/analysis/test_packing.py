@@ -5,7 +5,8 @@ import pytest
 from analysis.frame import Frame
 from analysis.packing import (EnclosingPackingFraction, FilledPackingFraction, PackingProfile,
                               bed_grains, cumulative_measure, layer_edges, period_average,
-                              packing_fraction, slab_packing_fraction, surface_height)
+                              packing_fraction, profile_change, slab_packing_fraction,
+                              surface_height)
 from tests.analysis.helpers import cubic, frame_of, random_unit, square
 
 
@@ -156,3 +157,18 @@ def test_frame_dimension_inference():
     assert rods2d.dim == 2 and rods2d.measure == 4.0
     tilted = Frame.from_arrays(np.zeros((1, 3)), 0.5, [2.0] * 3, axis=[[1, 0, 1]], length=1.0)
     assert tilted.dim == 3
+
+
+def test_profile_change_fits_the_middle_of_the_deposit():
+    """The rise of a straight-line fit over 10-90 % of the height; the base's ordered layer
+    and the loose top do not count."""
+    y = np.linspace(0.25, 9.75, 20)
+    phi = 0.6 + 0.05 * y / 10.0
+    assert profile_change(y, phi, top=10.0) == pytest.approx(0.05 * 0.8)
+    flat = np.full(20, 0.6)
+    flat[0], flat[-1] = 0.9, 0.2  # outside the middle 80 %
+    assert profile_change(y, flat, top=10.0) == pytest.approx(0.0, abs=1e-12)
+    assert profile_change(y, flat, top=10.0, inner=(0.0, 1.0)) < -0.1
+    assert np.isnan(profile_change(y[:2], phi[:2], top=10.0))
+    with pytest.raises(ValueError, match="inner"):
+        profile_change(y, phi, top=10.0, inner=(0.9, 0.1))

@@ -115,6 +115,25 @@ def test_smooth_walls_put_the_whole_weight_on_the_base(deposits):
 
 
 @pytest.mark.slow
+def test_deposit_rows_of_orientation_profile_and_correlation(deposits):
+    """The Hidalgo et al. rows of a deposit are those of its last frame: the mode and the
+    standing share of the angles to the horizontal, the uniformity flag of the slab
+    profile's change, and Q(r)'s range of values (at most 1 - (-1/2) in 3-D)."""
+    _, run_dir = deposits["frictional"]
+    rows, _ = analyse_deposit(run_dir, width=6.0, gravity=1.0, slab=1.0)
+    v = {name: value for name, value, _ in rows}
+    frame, _ = RunData(run_dir).frames()[-1]
+    beta = np.degrees(np.arcsin(np.abs(frame.axis[:, 2])))
+    assert v["standing_fraction"] == pytest.approx(np.mean(beta > 75.0))
+    count, _ = np.histogram(beta, bins=18, range=(0.0, 90.0))
+    assert v["orientation_mode"] == pytest.approx(5.0 * np.argmax(count) + 2.5)
+    assert np.isfinite(v["phi_profile_change"])
+    assert v["phi_profile_uniform"] == float(abs(v["phi_profile_change"]) <= 0.02)
+    assert 0.0 < v["q_r_peak_amplitude"] <= 1.5
+    assert np.isnan(v["q_r_length_peak"]) or 0.75 <= v["q_r_length_peak"] / 3.0 <= 1.25
+
+
+@pytest.mark.slow
 def test_cohesion_makes_the_deposit_looser(deposits):
     phi = {}
     for name in ("frictional", "cohesive"):

@@ -16,11 +16,8 @@ from analysis import plots
 from analysis.io import RunData
 from analysis.order import OrientationCorrelation, angle_to_horizontal
 from analysis.stress import StressField, particle_major_angles
-from analysis.summary import STRESS_ELEMENT
+from analysis.summary import ORDER_RANGE, STRESS_ELEMENT
 from workflows.runner import ok_runs
-
-#: ``Q(r)`` out to this many particle lengths ``L + D``
-ORDER_RANGE = 3.0
 
 
 def main(argv=None) -> int:
