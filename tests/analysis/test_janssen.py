@@ -106,3 +106,35 @@ def test_trace_in_elements_is_fitted_as_the_papers_fig6(rng, monkeypatch):
     shallow = prof.copy()
     rows = _trace_rve(None, None, shallow, edges[:4], width, 3.0, 1.0)
     assert all(np.isnan(v) for _, v, _ in rows) and shallow.trace_rve.isna().all()
+
+
+@pytest.mark.parametrize("h_true, curved", [(2.2, True), (200.0, False)])
+def test_trace_fit_past_the_data_stands_when_its_curvature_is_resolved(monkeypatch, h_true,
+                                                                       curved):
+    """The paper fits h_s / W = 2.2 to a deposit less deep than that: a profile 1.8 W deep
+    that bends (h_s = 2.2 W) gives its fit back, a nearly straight one (h_s = 200 W) gives
+    NaN, and both report the depth they reach."""
+    import pandas as pd
+
+    import analysis.stress
+    from analysis.summary import _trace_rve
+
+    width, top = 20.0, 36.0  # 36 slabs: 1.8 W
+    edges = np.arange(41.0)
+    centers = 0.5 * (edges[1:] + edges[:-1])
+    prof = pd.DataFrame({"depth": top - centers, "x": (top - centers) / width})
+    noise = np.random.default_rng(4).normal(0.0, 1.0, (8, 4))
+
+    def fake(frame, contacts, row_edges, lo, hi, columns):
+        x = (top - 0.5 * (row_edges[1:] + row_edges[:-1])) / width
+        mean = janssen(np.clip(x, 0, None), 300.0 * h_true / 2.2, h_true)
+        return mean[:, None] + noise[:len(mean)], np.full((len(mean), columns), 5)
+
+    monkeypatch.setattr(analysis.stress, "element_trace", fake)
+    rows = {n: (v, e) for n, v, e in _trace_rve(None, None, prof, edges, width, top, 1.0)}
+    assert rows["x_max_trace_rve"][0] == pytest.approx(33.5 / width)
+    h, h_err = rows["h_s_trace_rve"]
+    if curved:
+        assert h > rows["x_max_trace_rve"][0] and abs(h - 2.2) < 4 * h_err < 2 * h
+    else:
+        assert np.isnan(h) and prof.trace_rve_fit.isna().all()
