@@ -79,13 +79,21 @@ def _dof_index(dim: int, length: float, dofs) -> np.ndarray:
 
 def surface_contacts(rng, m: int, radius: float, length: float, dim: int = 3):
     """``m`` points uniform on the surface (perimeter in 2-D) of a spherocylinder in its
-    body frame and their outward unit normals: ``(points, normals)`` each (m, dim)."""
+    body frame and their outward unit normals: ``(points, normals)`` each (m, dim).
+
+    ``length = inf``: the infinite rod, every contact on the cylinder (the flat sides)
+    at an axial position uniform in ``[-1/2, 1/2]``. A side contact's lever about the
+    centre is its axial position times a vector normal to the axis, so scaling every
+    position alike rescales the rotation rows only, which leaves the caging decision
+    unchanged: any finite span stands for the infinite line."""
     if not radius > 0 or length < 0:
         raise ValueError(f"need radius > 0 and length >= 0, got {radius}, {length}")
-    a = 0.5 * length
+    infinite = np.isinf(length)
+    a = 0.5 if infinite else 0.5 * length
     if dim == 3:
         side_area, cap_area = 2 * np.pi * radius * length, 4 * np.pi * radius**2
-        side = rng.random(m) < side_area / (side_area + cap_area)
+        side = (np.ones(m, bool) if infinite
+                else rng.random(m) < side_area / (side_area + cap_area))
         n = rng.normal(size=(m, 3))
         n /= np.linalg.norm(n, axis=1)[:, None]
         phi = rng.uniform(0, 2 * np.pi, m)
@@ -97,7 +105,8 @@ def surface_contacts(rng, m: int, radius: float, length: float, dim: int = 3):
         return centre + radius * normal, normal
     if dim == 2:
         side_len, cap_len = 2 * length, 2 * np.pi * radius
-        side = rng.random(m) < side_len / (side_len + cap_len)
+        side = (np.ones(m, bool) if infinite
+                else rng.random(m) < side_len / (side_len + cap_len))
         phi = rng.uniform(0, 2 * np.pi, m)
         n_cap = np.column_stack([np.cos(phi), np.sin(phi)])
         up = rng.random(m) < 0.5
@@ -242,8 +251,8 @@ def cage_certificate(rows: np.ndarray, blocked):
 class CagingNumber(Observable):
     """Mean number of random contacts that cage a spherocylinder.
 
-    Parameters: ``radius`` ``R``, ``length`` ``L`` (0: disk/sphere; only ``alpha = L/D``
-    matters), ``dim`` 2 or 3, ``block_axial`` (rods: also block the axial translation) or
+    Parameters: ``radius`` ``R``, ``length`` ``L`` (0: disk/sphere; ``inf``: the infinite
+    rod, :func:`surface_contacts`; only ``alpha = L/D`` matters), ``dim`` 2 or 3, ``block_axial`` (rods: also block the axial translation) or
     explicit ``dofs`` names (module docstring), ``trials``, ``seed``, ``max_contacts``
     per trial (a trial needing more raises). ``compute()`` takes no frame. Trial ``k``
     draws from its own stream spawned from ``seed`` (:class:`numpy.random.SeedSequence`),
@@ -300,7 +309,9 @@ class CagingNumber(Observable):
 
 def wendel_caging_number(dim: int) -> float:
     """Exact caging number of a disk (``dim = 2``: 5) or sphere (``dim = 3``: 7) under
-    uniform random contacts: ``sum_n P(not caged after n)`` with Wendel's
+    uniform random contacts, and of any particle whose ``dim`` blocked freedoms get
+    centrally symmetric rows (the infinite rods: 2 in 2-D, 5; 4 in 3-D, 9), ``2 dim + 1``:
+    ``sum_n P(not caged after n)`` with Wendel's
     ``P = 2^(1-n) sum_{k<d} C(n-1, k)`` (and ``P = 1`` for ``n <= d``)."""
     from math import comb
 

@@ -1003,3 +1003,37 @@ def closest_jamming(points, out, references=None, title=None):
             if references is not None else "")
     fig.suptitle("; ".join(t for t in (title, note) if t), fontsize=10)
     _save(fig, out)
+
+
+def caging_numbers(table, out, references=None):
+    """Caging number of a spherocylinder against its aspect ratio (Wouterse et al.,
+    Fig. 10a): mean and standard error per ``dimension``; the infinite rod
+    (``alpha = inf``) as a horizontal line in its dimension's colour. ``table``:
+    columns ``dimension``, ``alpha``, ``mean``, ``stderr``. ``references``: rows
+    ``dimension``, ``alpha`` (inf for the infinite rod), ``value`` (the paper's numbers),
+    drawn as crosses (finite alpha) or dotted lines (infinite rods)."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    for k, (dim, g) in enumerate(table.groupby("dimension", sort=True)):
+        colour = f"C{k}"
+        g = g.sort_values("alpha")
+        fin = g[np.isfinite(g["alpha"])]
+        ax.errorbar(fin["alpha"], fin["mean"], yerr=fin["stderr"], marker="o", ms=4,
+                    color=colour, capsize=2, label=f"{int(dim)}-D, random point contacts")
+        for _, row in g[~np.isfinite(g["alpha"])].iterrows():
+            ax.axhline(row["mean"], color=colour, lw=1.0,
+                       label=f"{int(dim)}-D infinite rod: {row['mean']:.2f} "
+                             f"$\\pm$ {row['stderr']:.2f}")
+        if references is not None:
+            ref = references[np.isclose(references["dimension"].astype(float), dim)]
+            fin_ref = ref[np.isfinite(ref["alpha"].astype(float))]
+            ax.plot(fin_ref["alpha"], fin_ref["value"], "x", color=colour, ms=8,
+                    label=f"paper, {int(dim)}-D" if len(fin_ref) else None)
+            for v in ref[~np.isfinite(ref["alpha"].astype(float))]["value"]:
+                ax.axhline(float(v), color=colour, lw=0.8, ls=":")
+    ax.set_xscale("symlog", linthresh=0.1)
+    ax.set_xlabel(r"aspect ratio $\alpha = L/D$")
+    ax.set_ylabel(r"caging number $\langle\gamma\rangle$")
+    ax.legend(fontsize=7)
+    ax.set_title("contacts needed to cage a spherocylinder (paper: crosses, dotted)",
+                 fontsize=9)
+    _save(fig, out)

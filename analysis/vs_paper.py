@@ -70,7 +70,8 @@ OBSERVABLE_CONDITIONS.update({name: {"rattlers": "counted"} for name in (
 #: over packings), used as ours where a single row stands for many runs
 STANDARD_ERROR_OBSERVABLES = ("phi_gcp", "phi_gcp_minus_rcp", "phi_gcp_ls_initial",
                               "phi_gcp_ls_densified", "phi_gcp_fb_initial",
-                              "phi_gcp_fb_densified", "phi_mean_fast_ls", "phi_mean_fast_fb")
+                              "phi_gcp_fb_densified", "phi_mean_fast_ls", "phi_mean_fast_fb",
+                              "caging_number", "caging_number_max")
 OUTPUT_COLUMNS = ["id", "paper", "where", "study", "kind", "engine", "observable", *POINT,
                   "layer", *CONDITION_COLUMNS, "paper_value", "paper_uncertainty",
                   "uncertainty_kind", "ours", "ours_uncertainty", "n_seeds", "diff_sigma",
@@ -220,13 +221,13 @@ def _at_point(runs: pd.DataFrame, ref, skip: str | None = None) -> pd.DataFrame:
     """The runs of the row's study family at its parameters (``skip``: one left free)."""
     sel = runs["family"] == ref.study
     for p in POINT:
-        v = _float(getattr(ref, p))
-        if p == skip or not np.isfinite(v):
+        v = _float(getattr(ref, p))  # inf: the infinite rod, a point of its own
+        if p == skip or np.isnan(v):
             continue
         col = pd.to_numeric(runs[p], errors="coerce") if p in runs else None
         if col is None:
             return runs.iloc[0:0]
-        sel &= np.isclose(col.fillna(np.inf), v, rtol=RTOL, atol=1e-12)
+        sel &= np.isclose(col, v, rtol=RTOL, atol=1e-12)  # NaN matches nothing
     return runs[sel]
 
 
@@ -265,6 +266,15 @@ def _stats(values: pd.Series) -> tuple[float, float, int]:
     if n == 1:  # a run's own uncertainty is often a spread over frames, not an error
         return float(v[0]), float("nan"), 1
     return float(v.mean()), float(v.std(ddof=1) / math.sqrt(n)), n
+
+
+def _run_stats(runs: pd.DataFrame, observable: str) -> tuple[float, float, int]:
+    """:func:`_stats` of the runs' values; one run of an observable whose uncertainty is a
+    standard error (:data:`STANDARD_ERROR_OBSERVABLES`) gives that as ours."""
+    mean, sem, n = _stats(runs["value"])
+    if n == 1 and observable in STANDARD_ERROR_OBSERVABLES:
+        sem = _float(runs["uncertainty"].iloc[0])
+    return mean, sem, n
 
 
 #: runs pooled as seeds of one result: the same case of the same study on one engine (two
@@ -348,9 +358,7 @@ def _value_rows(ref, runs, results) -> list[dict]:
         else:  # the closest run's case, for information next to the verdict
             s, c = g.loc[worst[0], "study"], g.loc[worst[0], "case"]
             use = g[(g["study"] == s) & (g["case"] == c)]
-        mean, sem, n = _stats(use["value"])
-        if n == 1 and obs in STANDARD_ERROR_OBSERVABLES:
-            sem = _float(use["uncertainty"].iloc[0])
+        mean, sem, n = _run_stats(use, obs)
         row = {**base, "engine": engine, "ours": mean, "ours_uncertainty": sem, "n_seeds": n,
                "runs": _runs_label(use), "note": note}
         if not len(good):
@@ -502,7 +510,7 @@ def _trend_rows(ref, runs, results) -> list[dict]:
                 continue
             if good["case"].nunique() > 1:
                 several.append(f"{ref.vary} {_fmt(v)}: " + ", ".join(sorted(set(good["case"]))))
-            points.append((v, *_stats(good["value"])))
+            points.append((v, *_run_stats(good, names[v])))
         row = {**base, "engine": engine, "runs": _runs_label(g),
                "ours": ";".join(f"{m:.4g}" for _, m, _, _ in points) if points else np.nan,
                "ours_uncertainty": ";".join(f"{s:.2g}" for _, _, s, _ in points)

@@ -155,6 +155,34 @@ def closest_jamming_rows(study: str, root: Path) -> tuple[pd.DataFrame, list[dic
     return results, runs
 
 
+def caging_rows(study: str, root: Path) -> tuple[pd.DataFrame, list[dict]]:
+    """A study's caging numbers (its ``caging.csv``, workflows/scripts/caging_numbers.py)
+    as ``summary.csv`` rows of engine ``analysis``, one case per dimension and aspect
+    ratio, with run rows in the study's family (from any of its runs' cases): ``alpha``
+    (inf for the infinite rod), ``d``, ``dimension``, protocol ``caging``. The rod with
+    the largest caging number of each dimension also reports ``caging_number_max``."""
+    path = root / study / "caging.csv"
+    cases = sorted((root / study).glob("*/seed*/case.yaml"))
+    if not path.is_file() or not cases:
+        return pd.DataFrame(), []
+    fam = family(read_yaml(cases[0]))
+    t = pd.read_csv(path)
+    t["case"] = [f"caging_{int(d)}d_alpha{a:g}" for d, a in zip(t["dimension"], t["alpha"])]
+    rows = [t.assign(observable="caging_number")]
+    rods = t[t["alpha"] > 0]
+    if len(rods):
+        top = rods.loc[rods.groupby("dimension")["mean"].idxmax()]
+        rows.append(top.assign(observable="caging_number_max"))
+    long = pd.concat(rows, ignore_index=True)
+    results = summary_rows(study, long["case"], np.ones(len(long), int), long["observable"],
+                           long["mean"], long["stderr"]).assign(engine="analysis")
+    runs = [{"study": study, "case": c, "engine": "analysis", "seed": 1, "results": str(root),
+             "family": fam, "alpha": float(a), "d": 1.0 + float(a), "dimension": float(d),
+             "protocol": "caging"}
+            for c, d, a in zip(t["case"], t["dimension"], t["alpha"])]
+    return results, runs
+
+
 def _converged_only(summary: pd.DataFrame) -> pd.DataFrame:
     """``summary.csv`` rows without the measurements of runs that report ``converged``
     0 (a jammed state whose bisection ended without a stable state: its ``phi_j`` is no
@@ -170,8 +198,9 @@ def _converged_only(summary: pd.DataFrame) -> pd.DataFrame:
 def run_table(results_dirs) -> tuple[pd.DataFrame, pd.DataFrame]:
     """``(runs, results)`` of every ``summary.csv`` under ``results_dirs`` (with the band
     fractions of any ``<study>/modes.csv``, the cross-rate rows of any
-    ``<study>/growth_alpha*.csv`` and the characteristic densities of any
-    ``<study>/closest_jamming.csv`` beside it; no measurements of a run that did not
+    ``<study>/growth_alpha*.csv``, the characteristic densities of any
+    ``<study>/closest_jamming.csv`` and the caging numbers of any ``<study>/caging.csv``
+    beside it; no measurements of a run that did not
     converge, :func:`_converged_only`): one run row per ``study, case, engine, seed``
     with :func:`case_terms` of its ``case.yaml``
     (``<results>/<study>/<case>/seed<k>/case.yaml``). A folder without a summary is
@@ -188,9 +217,10 @@ def run_table(results_dirs) -> tuple[pd.DataFrame, pd.DataFrame]:
                   for study in df["study"].unique() if (root / study / "modes.csv").is_file()]
         parts += [growth_rate_rows(study, root) for study in df["study"].unique()]
         for study in df["study"].unique():
-            res, pseudo = closest_jamming_rows(study, root)
-            parts.append(res)
-            run_rows += pseudo
+            for derived in (closest_jamming_rows, caging_rows):
+                res, pseudo = derived(study, root)
+                parts.append(res)
+                run_rows += pseudo
         terms_of: dict[tuple, dict] = {}
         for (study, case, engine, seed), _ in df.groupby(["study", "case", "engine", "seed"]):
             key = (study, case, seed)

@@ -200,3 +200,33 @@ def test_sign_pretest_finds_a_missing_direction():
     rows = constraint_rows(0.5 * nrm, nrm)
     assert decide_caged(rows, [0, 1, 2]) == (False, "sign")
     assert not is_caged(rows, [0, 1, 2])
+
+
+def test_infinite_rod_contacts_lie_on_the_cylinder_and_scale_freely(rng):
+    """length = inf: every contact on the cylinder (2-D: the flat sides) at an axial
+    position in [-1/2, 1/2]; stretching the positions along the axis changes no caging
+    decision (the rotation rows scale, the cone's span does not)."""
+    p, n = surface_contacts(rng, 2000, 0.5, np.inf, dim=3)
+    assert np.all(n[:, 2] == 0) and np.all(np.abs(p[:, 2]) <= 0.5)
+    np.testing.assert_allclose(np.hypot(p[:, 0], p[:, 1]), 0.5)
+    p2, n2 = surface_contacts(rng, 2000, 0.5, np.inf, dim=2)
+    assert np.all(n2[:, 0] == 0) and np.all(np.abs(p2[:, 0]) <= 0.5)
+    blocked = np.array([0, 1, 3, 4])  # tx ty rx ry
+    for k in range(40):
+        pts, nrm = surface_contacts(rng, 6 + k % 6, 0.5, np.inf, dim=3)
+        stretched = pts * [1.0, 1.0, 37.0]
+        assert is_caged(constraint_rows(pts, nrm), blocked) == \
+            is_caged(constraint_rows(stretched, nrm), blocked)
+
+
+@pytest.mark.slow
+def test_infinite_rods_need_wendels_numbers():
+    """A side contact's row has no part along the axis or about it, and a contact on the
+    far side gives the opposite row: the rows are centrally symmetric in the 2 (2-D) or 4
+    (3-D) blocked freedoms, so Wendel's theorem gives 2 d + 1 = 5 and 9 (the paper's
+    values). 600 trials each, within four standard errors."""
+    for dim, freedoms in ((2, 2), (3, 4)):
+        c = CagingNumber(length=np.inf, dim=dim, trials=600, seed=11).compute()
+        exact = wendel_caging_number(freedoms)
+        assert exact == pytest.approx(2 * freedoms + 1)
+        assert abs(c.mean - exact) < 4 * c.stderr

@@ -96,12 +96,14 @@ def test_bad_config_stops_before_anything_runs(tmp_path):
 @pytest.mark.parametrize("profile, trends", [("deposition_cohesion", True),
                                              ("deposition_janssen", False),
                                              ("tapping_long", False),
-                                             ("random_packings_baranau", False)])
+                                             ("random_packings_baranau", False),
+                                             ("random_packings_wouterse", True)])
 def test_which_profiles_get_trends_and_sets_figures(tmp_path, profile, trends):
     """Deposits that vary only the Bond number (and what follows from it) get a trends
     figure; deposits that also vary the walls or the feed do not (a line through their
     Bond numbers would mix those up); tapping studies get the per-set figure and table;
-    hard-sphere studies the closest-jamming figure and table instead of trends."""
+    hard-sphere studies the closest-jamming figure and table instead of trends; a study
+    with an analysis.caging block its caging numbers, with the infinite rods."""
     r = subprocess.run([SNAKEMAKE, "--snakefile", str(ROOT / "Snakefile"), "--directory",
                         str(tmp_path), "--configfile",
                         str(ROOT / "workflows" / "config" / f"{profile}.yaml"), "--cores", "1",
@@ -111,6 +113,17 @@ def test_which_profiles_get_trends_and_sets_figures(tmp_path, profile, trends):
     assert ("plot_trends" in rules) == trends, rules[-2000:]
     assert ("plot_tapping_sets" in rules) == profile.startswith("tapping")
     assert ("closest_jamming" in rules) == profile.endswith("baranau")
+    assert ("caging_numbers" in rules) == profile.endswith("wouterse")
+    if profile.endswith("wouterse"):
+        r = subprocess.run([SNAKEMAKE, "--snakefile", str(ROOT / "Snakefile"), "--directory",
+                            str(tmp_path), "--configfile",
+                            str(ROOT / "workflows" / "config" / f"{profile}.yaml"), "--cores",
+                            "1", "--dry-run", "--printshellcmds", "--config",
+                            f"results={tmp_path / 'r'}", "--",
+                            str(tmp_path / "r" / "random_packings_wouterse" / "caging.csv")],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr[-2000:]
+        assert "--alphas-3d 0 0.05" in r.stdout and "20 inf --alphas-2d 0 inf" in r.stdout
 
 
 def test_config_key_given_twice_stops_before_anything_runs(tmp_path):

@@ -280,3 +280,45 @@ def test_reference_rows_at_a_runs_point():
     bands = rows[(rows["observable"] == "angle_late") & (rows["uncertainty_kind"] == "band")]
     assert sorted(bands["layer"].dropna().astype(int)) == [2, 3]
     assert ((rows["observable"] == "phi_late_enclosing") & (rows["tap"] == 2000)).any()
+
+
+def test_caging_numbers_join_as_runs_of_their_own(tmp_path):
+    """A study's caging.csv becomes runs of engine 'analysis' in the study's family, one
+    per dimension and aspect ratio (inf: the infinite rod, a point of its own), judged
+    against the paper's caging numbers; the largest rod value is caging_number_max."""
+    root = tmp_path / "results"
+    d = root / "w" / "alpha1.5" / "seed1"
+    d.mkdir(parents=True)
+    (d / "case.yaml").write_text(yaml.safe_dump({**CASE_2D, "particles": {
+        **CASE_2D["particles"], "dimension": 3}}))
+    pd.DataFrame([{"study": "w", "case": "alpha1.5", "engine": "pysim", "seed": 1,
+                   "observable": "phi_j", "value": 0.68, "uncertainty": float("nan")}]
+                 ).to_csv(root / "summary.csv", index=False)
+    inf = float("inf")
+    pd.DataFrame({"dimension": [2, 2, 3, 3, 3, 3, 3],
+                  "alpha": [0.0, inf, 0.0, 0.1, 15.0, 20.0, inf],
+                  "mean": [5.01, 4.98, 7.02, 10.5, 9.30, 9.25, 9.03],
+                  "stderr": [0.05] * 7, "trials": [1000] * 7, "seed": [1] * 7}
+                 ).to_csv(root / "w" / "caging.csv", index=False)
+    runs, results = run_table([root])
+    cage = runs[runs.engine == "analysis"]
+    assert len(cage) == 7 and set(cage.family) == {"random_packings"}
+    assert np.isinf(cage.alpha).sum() == 2
+    top = results[results.observable == "caging_number_max"].set_index("case")["value"]
+    assert top.to_dict() == {"caging_3d_alpha0.1": 10.5, "caging_2d_alphainf": 4.98}
+    refs = read_references(ROOT / "references")
+    refs = refs[refs["id"].isin([f"wouterse-2{k}" for k in range(1, 7)])]
+    from analysis.vs_paper import match
+    got = match(refs, runs, results)
+    # each case is judged on its own: the other dimension's case reads "conditions differ"
+    other = got.verdict.str.startswith("conditions differ: dimension")
+    assert other.sum() == 5
+    got = got[(got.engine == "analysis") & ~other].set_index("id")
+    assert got.index.is_unique
+    assert got.loc["wouterse-21", "ours"] == 5.01 and got.loc["wouterse-23", "ours"] == 4.98
+    assert got.loc["wouterse-22", "ours"] == 7.02 and got.loc["wouterse-24", "ours"] == 9.03
+    for k in (21, 22, 23, 24, 26):
+        assert got.loc[f"wouterse-{k}", "verdict"] == "agrees", k
+    # the largest rod value, 10.5 +- 0.05, against "around 12" +- 0.5
+    assert got.loc["wouterse-25", "verdict"] == "differs"
+    assert got.loc["wouterse-22", "ours_uncertainty"] == 0.05  # the trials' standard error

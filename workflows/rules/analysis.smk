@@ -78,6 +78,7 @@ rule vs_paper:
                            for s in sorted({s for s, _ in study_variants()})
                            for a in growth_groups(s)],
         closest_jamming=lambda wc: [f"{RESULTS}/{s}/closest_jamming.csv" for s in hard_studies()],
+        caging=lambda wc: [f"{RESULTS}/{s}/caging.csv" for s in caging_studies()],
         references=sorted(glob.glob(os.path.join(REFERENCES, "*.csv"))),
     output:
         table=report(

@@ -137,6 +137,8 @@ def get_final_output():
                         f"{RESULTS}/{study}/growth_alpha{alpha}.csv"]
         if study in modes_studies():
             out.append(f"{RESULTS}/{study}/figures/modes.png")  # dynamical matrix
+        if study in caging_studies():  # random contacts on one particle, no run needed
+            out += [f"{RESULTS}/{study}/caging.csv", f"{RESULTS}/{study}/figures/caging.png"]
         if protocol[study] == "compress" and len({c["particles"]["n"] for c in cases}) > 1 and all(
             c["particles"].get("dimension", 3) == 2 and c["particles"]["aspect_ratio"] > 0
             for c in cases
@@ -164,6 +166,25 @@ def growth_groups(study):
             groups.setdefault(f"{case['particles'].get('aspect_ratio', 0.0):g}", []).append(
                 f"{RESULTS}/{r.run_dir}")
     return groups
+
+
+def caging_studies():
+    """The studies with an ``analysis.caging`` block (rule caging_numbers)."""
+    return sorted({s for s, _ in study_variants()
+                   if "caging" in CFG["studies"][s].get("analysis", {})})
+
+
+def caging_args(study):
+    """Command-line options of workflows/scripts/caging_numbers.py from a study's
+    ``analysis.caging`` block."""
+    spec = CFG["studies"][study]["analysis"]["caging"]
+    out = [f"--trials {int(spec['trials'])}", f"--seed {int(spec.get('seed', 2024))}"]
+    for key in ("alphas_3d", "alphas_2d"):
+        if spec.get(key):
+            alphas = [f"{float(a):g}" for a in spec[key]] + (["inf"] if spec.get("infinite_rods")
+                                                              else [])
+            out.append(f"--{key.replace('_', '-')} " + " ".join(alphas))
+    return " ".join(out)
 
 
 def hard_studies():

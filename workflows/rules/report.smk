@@ -457,3 +457,20 @@ rule closest_jamming:
     shell:
         "{PYTHON} -m workflows.scripts.closest_jamming --figure {output.figure}"
         " --table {output.table} {params.dirs} 2> {log}"
+
+
+rule caging_numbers:
+    output:
+        table=f"{RESULTS}/{{study}}/caging.csv",
+        figure=report(
+            f"{RESULTS}/{{study}}/figures/caging.png",
+            caption="../report/caging.rst",
+            category="{study}",
+        ),
+    log:
+        f"{RESULTS}/{{study}}/figures/caging.log",
+    params:
+        args=lambda wc: caging_args(wc.study),
+    shell:
+        "{PYTHON} -m workflows.scripts.caging_numbers --table {output.table}"
+        " --figure {output.figure} {params.args} 2> {log}"
