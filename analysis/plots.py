@@ -1031,9 +1031,10 @@ def caging_numbers(table, out, references=None):
             for v in ref[~np.isfinite(ref["alpha"].astype(float))]["value"]:
                 ax.axhline(float(v), color=colour, lw=0.8, ls=":")
     ax.set_xscale("symlog", linthresh=0.1)
+    ax.set_xlim(left=-0.01)  # the spheres and disks at 0 stay inside
     ax.set_xlabel(r"aspect ratio $\alpha = L/D$")
     ax.set_ylabel(r"caging number $\langle\gamma\rangle$")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper right")
     ax.set_title("contacts needed to cage a spherocylinder (paper: crosses, dotted)",
                  fontsize=9)
     _save(fig, out)
