@@ -213,15 +213,21 @@ def test_a_jammed_state_that_did_not_converge_measures_nothing(tmp_path):
     assert len(runs) == 2
 
 
-def test_cross_rate_rows_of_growth_csv_join_the_slowest_run(tmp_path):
+def _one_3d_run(tmp_path, case: str, phi_j: float) -> Path:
+    """A results folder with one 3-D run of study ``w`` (its case and summary row)."""
     root = tmp_path / "results"
-    d = root / "w" / "alpha0_slow" / "seed1"
+    d = root / "w" / case / "seed1"
     d.mkdir(parents=True)
     (d / "case.yaml").write_text(yaml.safe_dump({**CASE_2D, "particles": {
         **CASE_2D["particles"], "dimension": 3}}))
-    pd.DataFrame([{"study": "w", "case": "alpha0_slow", "engine": "pysim", "seed": 1,
-                   "observable": "phi_j", "value": 0.64, "uncertainty": float("nan")}]
+    pd.DataFrame([{"study": "w", "case": case, "engine": "pysim", "seed": 1,
+                   "observable": "phi_j", "value": phi_j, "uncertainty": float("nan")}]
                  ).to_csv(root / "summary.csv", index=False)
+    return root
+
+
+def test_cross_rate_rows_of_growth_csv_join_the_slowest_run(tmp_path):
+    root = _one_3d_run(tmp_path, "alpha0_slow", 0.64)
     pd.DataFrame({"case": ["alpha0_slow"] * 2, "seed": [1, 1],
                   "observable": ["phi_c_rate_independent", "phi_noncaged_rate_independent"],
                   "value": [0.601, float("nan")], "alpha": [0.0, 0.0], "runs": [3, 3],
@@ -286,14 +292,7 @@ def test_caging_numbers_join_as_runs_of_their_own(tmp_path):
     """A study's caging.csv becomes runs of engine 'analysis' in the study's family, one
     per dimension and aspect ratio (inf: the infinite rod, a point of its own), judged
     against the paper's caging numbers; the largest rod value is caging_number_max."""
-    root = tmp_path / "results"
-    d = root / "w" / "alpha1.5" / "seed1"
-    d.mkdir(parents=True)
-    (d / "case.yaml").write_text(yaml.safe_dump({**CASE_2D, "particles": {
-        **CASE_2D["particles"], "dimension": 3}}))
-    pd.DataFrame([{"study": "w", "case": "alpha1.5", "engine": "pysim", "seed": 1,
-                   "observable": "phi_j", "value": 0.68, "uncertainty": float("nan")}]
-                 ).to_csv(root / "summary.csv", index=False)
+    root = _one_3d_run(tmp_path, "alpha1.5", 0.68)
     inf = float("inf")
     pd.DataFrame({"dimension": [2, 2, 3, 3, 3, 3, 3],
                   "alpha": [0.0, inf, 0.0, 0.1, 15.0, 20.0, inf],
