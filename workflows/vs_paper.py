@@ -40,8 +40,8 @@ def case_terms(case: dict) -> dict:
     (``alpha``, ``d``, ``sigma``, ``e_n``, ``Gamma``, ``bo_g``) and the condition keys
     (``tap``, ``n``, ``dimension``, ``protocol``, ``rate``, ``friction``, ``law``,
     ``rod_contact``, ``compress_contact``, ``bidisperse``, ``container``,
-    ``width_over_length``, ``feed``); ``nan`` where a term does not apply (the rod contact
-    rules to spheres and disks)."""
+    ``width_over_length``, ``feed``, ``grain_density``); ``nan`` where a term does not
+    apply (the rod contact rules to spheres and disks)."""
     nan = float("nan")
     p, c, pr = case["particles"], case.get("contact", {}), case["protocol"]  # hard spheres: none
     cont = case.get("container")
@@ -74,6 +74,7 @@ def case_terms(case: dict) -> dict:
         "container": cont["shape"] if cont else "periodic",
         "width_over_length": (cont["width"] / length if cont and "width" in cont else nan),
         "feed": ("continuous" if "feed" in pr else "column") if deposit else nan,
+        "grain_density": float(p.get("density", 1.0)),
     }
 
 

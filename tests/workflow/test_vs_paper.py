@@ -44,6 +44,13 @@ def test_case_terms():
     t = case_terms(dep)
     assert family(dep) == "deposition" and t["bo_g"] == 1e3 and t["d"] == 10.0
     assert t["width_over_length"] == 20.0 and t["feed"] == "column"
+    assert t["grain_density"] == 1.0  # the schema's default
+    # a stress in the paper's own units, for grains of a density it does not state, is
+    # never compared with ours
+    from analysis.vs_paper import unmet_conditions
+    refs = read_references(ROOT / "references").set_index("id")
+    row = refs.loc["hidalgo-04"]
+    assert unmet_conditions(t, row)[-1] == "grain_density (ours 1, paper unstated)"
 
 
 def _results(tmp_path, n=1000, taps=2000, values=(0.75, 0.76)):
