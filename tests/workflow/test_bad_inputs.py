@@ -189,7 +189,7 @@ CONFIG_CASES = [
      "studies.s.analysis.c_min = 2.5 is not allowed; use a value of type integer"),
     ({"studies": {"s": {"engines": ["pysim"], "seeds": [1], "case": {},
                         "analysis": {"cmin": 3}}}},
-     "unknown key 'studies.s.analysis.cmin'; allowed here: c_min, jamming_window, "
+     "unknown key 'studies.s.analysis.cmin'; allowed here: c_min, caging, jamming_window, "
      "modes_energies, modes_variants"),
     ({"studies": {"s": {"engines": ["pysim"], "seeds": [1], "case": {},
                         "variants": {"a1": {}, "a4": {}},
