@@ -675,7 +675,7 @@ def _trace_rve(frame, contacts, prof: pd.DataFrame, edges, width: float, top: fl
     # than two standard errors from a straight profile, which fixes only sigma_m / h_s.
     if not (fit.h_s > 0 and np.isfinite(fit.h_s_err) and fit.h_s_err < 0.5 * fit.h_s):
         return [(name, np.nan, np.nan) for name in names[:-1]] + [
-            ("chi2_dof_trace_rve", np.nan, np.nan), ("x_max_trace_rve", x_max, np.nan)]
+            ("x_max_trace_rve", x_max, np.nan)]
     prof["trace_rve_fit"] = janssen(prof["x"].clip(lower=0.0), fit.sigma_m, fit.h_s)
     return [("sigma_m_trace_rve", float(fit.sigma_m), float(fit.sigma_m_err)),
             ("h_s_trace_rve", float(fit.h_s), float(fit.h_s_err)),

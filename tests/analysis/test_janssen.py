@@ -131,7 +131,9 @@ def test_trace_fit_past_the_data_stands_when_its_curvature_is_resolved(monkeypat
         return mean[:, None] + noise[:len(mean)], np.full((len(mean), columns), 5)
 
     monkeypatch.setattr(analysis.stress, "element_trace", fake)
-    rows = {n: (v, e) for n, v, e in _trace_rve(None, None, prof, edges, width, top, 1.0)}
+    listed = _trace_rve(None, None, prof, edges, width, top, 1.0)
+    rows = {n: (v, e) for n, v, e in listed}
+    assert len(rows) == len(listed) == 4  # each observable once, fitted or not
     assert rows["x_max_trace_rve"][0] == pytest.approx(33.5 / width)
     h, h_err = rows["h_s_trace_rve"]
     if curved:

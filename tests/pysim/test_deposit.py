@@ -9,6 +9,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pandas as pd
 import pytest
 import yaml
 
@@ -294,6 +295,41 @@ def test_fed_run_resumes_bit_identically(fed_run, tmp_path):
     assert again.returncode == 0, again.stderr
     for name in ("particles.dump", "contacts.dump", "thermo.dat"):
         assert (out / name).read_bytes() == (ref / name).read_bytes(), name
+
+
+@pytest.mark.slow
+def test_pipeline_resumes_a_deposit_whose_stopping_rule_changed(fed_run, tmp_path):
+    """The runner resumes a pysim deposit whose case changed only in when it stops
+    (protocol.max_time, ke_ratio: workflows.engines.restarts.STOP_KEYS): stopped by a
+    short max_time, then given the full one and a looser ke_ratio, it goes on from its
+    checkpoint along the uninterrupted run's trajectory and stops at the first settling
+    check that meets the looser rule. Any other change starts over."""
+    from workflows import engines, runner
+
+    case, ref = fed_run
+    data = ref.parent / "init.data"
+    out = tmp_path / "run"
+    cp = tmp_path / "case.yaml"
+    cp.write_text(yaml.safe_dump(validate_case(fed(protocol__max_time=5.0))))
+    rec = runner.run("pysim", cp, data, out, timeout=600)
+    assert rec["status"] == "failed" and "did not settle by max_time = 5" in rec["error"]
+    assert (out / "checkpoint.npz").exists()
+    looser = validate_case(fed(protocol__ke_ratio=1e-3))
+    assert engines.resume_stamp("pysim", looser, data) == \
+        engines.resume_stamp("pysim", validate_case(fed(protocol__max_time=5.0)), data)
+    assert engines.resume_stamp("pysim", validate_case(fed(contact__friction=0.4)), data) != \
+        engines.resume_stamp("pysim", looser, data)
+    assert engines.resume_stamp("lammps", looser, data) != engines.resume_stamp("lammps", case,
+                                                                                 data)
+    cp.write_text(yaml.safe_dump(looser))
+    runner.clear_failed(out)
+    rec = runner.run("pysim", cp, data, out, timeout=600)
+    assert rec["status"] == "ok", rec.get("error")
+    assert rec["resumed"] and rec["settled"] and rec["ke_ratio"] < 1e-3
+    ours = pd.read_csv(out / "thermo.dat", sep=r"\s+", comment="#", header=None)
+    full = pd.read_csv(ref / "thermo.dat", sep=r"\s+", comment="#", header=None)
+    assert len(ours) < len(full)  # stopped earlier, on the same trajectory
+    pd.testing.assert_frame_equal(ours, full.iloc[:len(ours)])
 
 
 def test_add_particles_keeps_the_springs_and_refuses_overlaps():

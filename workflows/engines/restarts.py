@@ -25,11 +25,22 @@ KEEP_RESTARTS = 3
 PRUNE_SECONDS = 10.0
 
 
+#: keys of a pysim protocol that only say when a run stops, not how it moves: a run whose
+#: case changed in them alone resumes (a later max_time goes on; a looser ke_ratio stops
+#: at the first settling check after the checkpoint that meets it, which may be later than
+#: where a run started afresh would stop)
+STOP_KEYS = {"deposit": ("max_time", "ke_ratio")}
+
+
 def resume_stamp(engine: str, case: dict, data) -> dict:
-    """What identifies a run for resuming (``resume.json``): engine, case hash and the
-    initial data's hash."""
+    """What identifies a run for resuming (``resume.json``): engine, case hash (for pysim
+    without the protocol's :data:`STOP_KEYS`) and the initial data's hash."""
     from rodcase.case import case_hash
 
+    stops = STOP_KEYS.get(case["protocol"]["name"], ()) if engine == "pysim" else ()
+    if stops:
+        case = {**case, "protocol": {k: v for k, v in case["protocol"].items()
+                                     if k not in stops}}
     return {"engine": engine, "case_hash": case_hash(case),
             "data": hashlib.sha256(Path(data).read_bytes()).hexdigest()}
 
