@@ -609,8 +609,13 @@ def deposit_profiles(runs, out):
     axes[3].set_title("final frame", fontsize=8)
     axes[3].set_ylabel("probability density (1/deg)")
     beta = np.linspace(0, 90, 91)
-    axes[3].plot(beta, np.cos(np.radians(beta)) * np.pi / 180, color="grey", lw=0.8, ls=":",
-                 label="isotropic (3-D)")
+    dims = {r.get("dim", 3) for r in runs}
+    if 3 in dims:  # uniform directions on the sphere
+        axes[3].plot(beta, np.cos(np.radians(beta)) * np.pi / 180, color="grey", lw=0.8,
+                     ls=":", label="isotropic (3-D)")
+    if 2 in dims:  # uniform angles in the plane
+        axes[3].plot(beta, np.full_like(beta, 1.0 / 90.0), color="grey", lw=0.8, ls="--",
+                     label="isotropic (2-D)")
     axes[3].legend(fontsize=6)
     axes[4].axhline(0.0, color="grey", lw=0.6)
     axes[4].set_xlabel("centre distance r / (L + D)")

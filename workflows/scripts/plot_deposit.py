@@ -34,7 +34,7 @@ def main(argv=None) -> int:
         q = OrientationCorrelation(ORDER_RANGE * length, bins=24).compute(last)
         field = StressField(STRESS_ELEMENT * length, angle_bins=9).compute(last, contacts)
         runs.append({"label": f"{variant} {engine} {seed}", "engine": engine,
-                     "index": variants.index(variant),
+                     "index": variants.index(variant), "dim": last.dim,
                      "profile": pd.read_csv(d / "curves.csv"),
                      "angles": np.degrees(angle_to_horizontal(last)),
                      "q_r": (q.centers / length, q.q),
