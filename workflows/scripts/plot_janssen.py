@@ -21,7 +21,9 @@ from workflows.vs_paper import REFERENCES, case_terms, reference_rows
 def paper_fit(case: dict, references=REFERENCES) -> dict | None:
     """The paper's Janssen fit of the trace at a case's point (``sigma_m_trace_rve`` and
     ``h_s_trace_rve`` rows of ``references``), or ``None`` where it gives none;
-    ``unmet``: the paper's conditions the case does not meet (width, N, feed, ...)."""
+    ``unmet``: the paper's conditions of its ``h_s`` the case does not meet (width, N,
+    feed, ...): the figure compares the shape of the profile, ``tr sigma / sigma_m``
+    against ``x``, not the paper's stresses (their grain density is unstated)."""
     refs = reference_rows(case, references)
     fit, unmet = {}, []
     for observable, key in (("sigma_m_trace_rve", "sigma_m"), ("h_s_trace_rve", "h_s")):
@@ -31,7 +33,8 @@ def paper_fit(case: dict, references=REFERENCES) -> dict | None:
         ref = next(rows.itertuples())
         fit[key] = float(ref.value)
         fit["label"] = f"{ref.paper} ({ref.where.split(';')[0]})"
-        unmet += [u for u in unmet_conditions(case_terms(case), ref) if u not in unmet]
+        if key == "h_s":
+            unmet = unmet_conditions(case_terms(case), ref)
     return {**fit, "unmet": unmet}
 
 
