@@ -97,11 +97,12 @@ def standing_fraction(beta, within: float = UPRIGHT_WITHIN) -> float:
 
 
 def _window(centers, q, lo: float, hi: float):
+    """``(centers, q, k)`` as arrays and the indices ``k`` of the non-empty shells with
+    centres in ``[lo, hi]``."""
     centers, q = np.asarray(centers, dtype=np.float64), np.asarray(q, dtype=np.float64)
     if not lo < hi:
         raise ValueError(f"the window needs lo < hi, got [{lo}, {hi}]")
-    keep = (centers >= lo) & (centers <= hi) & np.isfinite(q)
-    return np.flatnonzero(keep)
+    return centers, q, np.flatnonzero((centers >= lo) & (centers <= hi) & np.isfinite(q))
 
 
 def correlation_peak(centers, q, lo: float, hi: float, err=None) -> float:
@@ -110,25 +111,23 @@ def correlation_peak(centers, q, lo: float, hi: float, err=None) -> float:
     stands above both by more than twice its standard error ``err`` (zero if None);
     NaN when ``q`` runs up or down through the window, or fewer than 3 shells hold
     pairs. Same units as ``centers``."""
-    k = _window(centers, q, lo, hi)
+    centers, q, k = _window(centers, q, lo, hi)
     if len(k) < 3:
         return float("nan")
-    q = np.asarray(q, dtype=np.float64)
     top = k[int(np.argmax(q[k]))]
     margin = 0.0 if err is None else 2.0 * float(np.asarray(err, dtype=np.float64)[top])
     if top in (k[0], k[-1]) or not q[top] - margin > max(q[k[0]], q[k[-1]]):
         return float("nan")
-    return float(np.asarray(centers, dtype=np.float64)[top])
+    return float(centers[top])
 
 
 def correlation_amplitude(centers, q, lo: float, hi: float) -> float:
     """Height of the highest maximum above the deepest minimum of ``q(r)`` over the
     shells with centres in ``[lo, hi]`` (empty shells skipped; NaN if none)."""
-    k = _window(centers, q, lo, hi)
+    _, q, k = _window(centers, q, lo, hi)
     if len(k) == 0:
         return float("nan")
-    q = np.asarray(q, dtype=np.float64)[k]
-    return float(q.max() - q.min())
+    return float(q[k].max() - q[k].min())
 
 
 def _rods(frame: Frame) -> np.ndarray:

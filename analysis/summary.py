@@ -736,7 +736,7 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
     weight).
     """
     from analysis.janssen import JanssenFit, JanssenFitError, janssen
-    from analysis.order import (AngleToHorizontal, OrientationCorrelation,
+    from analysis.order import (UPRIGHT_WITHIN, AngleToHorizontal, OrientationCorrelation,
                                 correlation_amplitude, correlation_peak, orientation_mode,
                                 standing_fraction)
     from analysis.packing import (UNIFORM_PROFILE, FilledPackingFraction, cumulative_measure,
@@ -770,10 +770,10 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
     rows = [("phi_deposit", float(fill.phi), np.nan),
             ("height", float(fill.height), np.nan),
             ("angle_mean", float(ang.mean_deg), np.nan),
-            ("flat_fraction", float(np.mean(ang.angles < np.radians(15.0))), np.nan),
+            ("flat_fraction", float(np.mean(ang.angles < np.radians(UPRIGHT_WITHIN))), np.nan),
             ("standing_fraction", standing_fraction(ang.angles), np.nan),
             ("orientation_mode", orientation_mode(ang.angles), np.nan)]
-    change = profile_change(0.5 * (edges[1:] + edges[:-1]), phi_slab, fill.top)
+    change = profile_change(sp.centers, phi_slab, fill.top)
     rows += [("phi_profile_change", change, np.nan),
              ("phi_profile_uniform",
               float(abs(change) <= UNIFORM_PROFILE) if np.isfinite(change) else np.nan, np.nan)]
