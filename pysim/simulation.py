@@ -46,13 +46,15 @@ class ContactModel:
     * wall contacts use ``k_n``, ``gamma_n``, ``k_t``, ``gamma_t`` with ``mu_wall``
       (default ``mu``) and no cohesion.
     * ``spine_contact``: ``"closest"`` (science.md section 2: one contact at the closest
-      points of the spines) or ``"end_bonds"`` (frictionless, cohesionless 2-D rods: one
-      bond from each spine end to the other spine, :func:`pysim.contacts.end_bond`; a
-      smooth energy where the closest-point law has a kink at parallel side contacts;
-      :class:`Simulation` refuses it for a 3-D state, :meth:`check_dimension`), or
-      ``"end_bonds_distinct"``: the same, a bond that joins the same two points as
-      another counted once (:func:`pysim.contacts.kinematics.repeats_bond`), so a tip-tip
-      contact is one bond and a side-side contact two, as in Marschall & Teitel (2018).
+      points of the spines) or ``"end_bonds"`` (2-D rods: one bond from each spine end to
+      the other spine, :func:`pysim.contacts.end_bond`, each a contact of the full law
+      with its own tangential spring and cohesion, as the vertex-edge contacts of
+      spheropolygons; a smooth energy where the closest-point law has a kink at parallel
+      side contacts; :class:`Simulation` refuses it for a 3-D state,
+      :meth:`check_dimension`), or ``"end_bonds_distinct"``: the same, a bond that joins
+      the same two points as another counted once
+      (:func:`pysim.contacts.kinematics.repeats_bond`), so a tip-tip contact is one bond
+      and a side-side contact two, as in Marschall & Teitel (2018).
     * every parameter is a finite number (NaN would pass a ``>= 0`` test and run).
     * ``limit_damping``: clip every contact's normal force (grains and walls) at zero, so
       that the damping never pulls (LAMMPS' ``limit_damping``); off by default, as in
@@ -94,10 +96,6 @@ class ContactModel:
             value = getattr(self, name)
             if value is not None and not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} = {value} is not allowed; use a finite number >= 0")
-        if self.spine_contact != "closest" and (self.mu > 0 or self.f_coh > 0):
-            raise ValueError(f"spine_contact '{self.spine_contact}' is frictionless and "
-                             f"cohesionless (got mu = {self.mu}, f_coh = {self.f_coh}); "
-                             "use mu = 0 and f_coh = 0, or spine_contact 'closest'")
         if self.f_coh > 0 and not self.d_coh > 0:
             raise ValueError(f"cohesion f_coh = {self.f_coh} needs a range d_coh > 0")
 
@@ -118,6 +116,14 @@ class ContactModel:
     @property
     def friction(self) -> bool:
         return self.mu > 0
+
+    @property
+    def spring_columns(self) -> int:
+        """Columns of a pair's tangential history: three per bond (four end bonds, one
+        closest-point contact), none without friction."""
+        if not self.friction:
+            return 0
+        return 3 * (4 if self.spine_contact != "closest" else 1)
 
     def pair_params(self) -> np.ndarray:
         return contact_params(self.k_n, self.gamma_n, self.k_t, self.gamma_t, self.mu,
@@ -238,7 +244,7 @@ class Simulation:
         itg.wrap(s.x, s.box, s.periodic)
         self.pi = np.zeros(0, np.int32)
         self.pj = np.zeros(0, np.int32)
-        self.hist = np.zeros((0, 3 if model.friction else 0))
+        self.hist = np.zeros((0, model.spring_columns))
         self.x_ref = s.x.copy()
         self.u_ref = s.u.copy() if self.params["rods"][0] else np.zeros((0, 3))
         self.box_ref = s.box.copy()
@@ -600,10 +606,14 @@ class Simulation:
     def set_spine_contact(self, spine_contact: str):
         """Change the rods' contact rule (:attr:`ContactModel.spine_contact`) from now on,
         and evaluate the forces again under it. The pair list stays: every rule has the
-        same reach, and the rules other than ``"closest"`` are frictionless, so there is
-        no tangential history to carry."""
+        same reach. A frictional model cannot switch between the closest point and the
+        end bonds: their tangential springs sit at different points."""
         model = replace(self.model, spine_contact=spine_contact)
         model.check_dimension(self.state.dimension)
+        if model.spring_columns != self.model.spring_columns:
+            raise ValueError(f"cannot switch a frictional model (mu = {model.mu}) from "
+                             f"spine_contact '{self.model.spine_contact}' to "
+                             f"'{spine_contact}': their tangential springs do not carry over")
         self.model = model
         self._cp = model.pair_params()
         self.compute_forces()

@@ -382,13 +382,15 @@ def _check_case(case: dict, source: str, at: str):
     if pr["name"] == "growth" and pr["phi_grow"] >= pr["phi_max"]:
         raise ConfigError(f"{source}: {at}protocol.phi_grow = {pr['phi_grow']} must be below "
                           f"phi_max = {pr['phi_max']}")
-    for key, law in (("contact.spine_contact", c.get("spine_contact", "closest")),
-                     ("protocol.compress_spine_contact",
-                      pr.get("compress_spine_contact", "closest"))):
-        if law != "closest" and (dim != 2 or c["friction"] > 0 or c.get("bond_number", 0) > 0):
-            raise ConfigError(f"{source}: {at}{key} = {law} is for 2-D frictionless, "
-                              "cohesionless rods (dimension 2, friction 0, no bond_number); "
-                              f"got dimension {dim}, friction {c['friction']}")
+    if c.get("spine_contact", "closest") != "closest" and dim != 2:
+        raise ConfigError(f"{source}: {at}contact.spine_contact = {c['spine_contact']} is "
+                          f"for 2-D rods; got dimension {dim}")
+    # the compression switches rules mid-run, which tangential springs cannot follow
+    squeeze = pr.get("compress_spine_contact", "closest")
+    if squeeze != "closest" and (dim != 2 or c["friction"] > 0 or c.get("bond_number", 0) > 0):
+        raise ConfigError(f"{source}: {at}protocol.compress_spine_contact = {squeeze} is for "
+                          "2-D frictionless, cohesionless rods (dimension 2, friction 0, no "
+                          f"bond_number); got dimension {dim}, friction {c['friction']}")
     if c["friction"] > 0 and not c["k_t"] > 0:
         raise ConfigError(f"{source}: {at}contact.k_t = {c['k_t']} must be > 0 when "
                           f"friction = {c['friction']} > 0 (law {c['law']}; for the linear "

@@ -58,7 +58,7 @@ Pairs out of contact add nothing and every pair's contribution is a pure functio
 its two particles, so forces do not depend on how many extra pairs the Verlet list
 holds: results are bit-identical across list rebuilds and restarts.
 
-With ``spine_contact = "end_bonds"`` (:func:`end_bond`, frictionless only) a rod pair is
+With ``spine_contact = "end_bonds"`` (:func:`end_bond`) a rod pair is
 up to four bonds, each a contact of the same law (``"end_bonds_distinct"``: a bond that
 repeats another's two points, :func:`repeats_bond`, counts once); a pair's forces,
 torques and virial are the sums over its bonds, and its recorded contact has the summed

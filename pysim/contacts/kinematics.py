@@ -5,7 +5,7 @@ Geometry (science.md section 2): closest points ``p_i = x_i + s u_i`` and
 ``p_j = x_j + t u_j`` of the spines (:func:`pysim.geometry.closest_params`), distance
 ``d = |p_j - p_i|``, overlap ``delta = R_i + R_j - d``, normal ``n = (p_j - p_i)/d``,
 contact point in the middle of the overlap ``c = p_i + (R_i - delta/2) n``. With
-``spine_contact = "end_bonds"`` (:func:`end_bond`, frictionless only) a rod pair is up to
+``spine_contact = "end_bonds"`` (:func:`end_bond`) a rod pair is up to
 four bonds, each a contact of the same law; with ``"end_bonds_distinct"`` a bond that
 joins the same two points as another (:func:`repeats_bond`) counts once.
 """

@@ -4,12 +4,14 @@ spherocylinders with ``L = 0``), any normal law, friction, cohesion and end bond
 :func:`pysim.contacts.reactions.reduce_pass`) and :func:`pair_forces` (serial, in pair
 order, and can record the contact table).
 
-With ``spine_contact = "end_bonds"`` (:func:`pysim.contacts.kinematics.end_bond`,
-frictionless only) a rod pair is up to four bonds, each a contact of the same law (with
+With ``spine_contact = "end_bonds"`` (:func:`pysim.contacts.kinematics.end_bond`) a rod
+pair is up to four bonds, each a contact of the same law with its own tangential spring
+(columns ``3 k : 3 k + 3`` of the pair's history row for bond ``k``; with
 ``"end_bonds_distinct"`` a bond that repeats another's two points counts once,
-:func:`pysim.contacts.kinematics.repeats_bond`); a pair's forces, torques and virial
-are the sums over its bonds, and its recorded contact has the summed force, the
-force-weighted mean point, and the normal and overlap of the deepest bond.
+:func:`pysim.contacts.kinematics.repeats_bond`): the vertex-edge contacts of
+spheropolygons (Alonso-Marroquin's method, which Hidalgo et al. use). A pair's forces,
+torques and virial are the sums over its bonds, and its recorded contact has the summed
+force, the force-weighted mean point, and the normal and overlap of the deepest bond.
 """
 from __future__ import annotations
 
@@ -93,9 +95,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
                 # out of reach by the motion bound (a margin far above rounding): no force
                 if use_sep and sep_sigma * fj[SEP, k] - sep_shrink > reach * (1.0 + 1e-9):
                     if friction:
-                        hist[k, 0] = 0.0
-                        hist[k, 1] = 0.0
-                        hist[k, 2] = 0.0
+                        hist[k, :] = 0.0
                     if not scatter:
                         _no_reaction(_slot(k, j, jstart, jk), fr)
                     continue
@@ -126,26 +126,30 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
                         a0, a1, a2, g0, g1, g2 = spine_gap(d0, d1, d2, ui0, ui1, ui2, hi, uj0,
                                                            uj1, uj2, hj)
                     dist2 = g0 * g0 + g1 * g1 + g2 * g2
-                    if dist2 >= reach * reach:
-                        continue
-                    if once and kb > 0 and repeats_bond(d0, d1, d2, ui0, ui1, ui2, hi, uj0,
-                                                        uj1, uj2, hj, kb):
+                    hb = 3 * kb  # the bond's spring in the pair's history row
+                    if dist2 >= reach * reach or (
+                            once and kb > 0 and repeats_bond(d0, d1, d2, ui0, ui1, ui2, hi,
+                                                             uj0, uj1, uj2, hj, kb)):
+                        if friction:
+                            hist[k, hb] = 0.0
+                            hist[k, hb + 1] = 0.0
+                            hist[k, hb + 2] = 0.0
                         continue
                     touching = True
                     h0 = 0.0
                     h1 = 0.0
                     h2 = 0.0
                     if friction:
-                        h0, h1, h2 = hist[k, 0], hist[k, 1], hist[k, 2]
+                        h0, h1, h2 = hist[k, hb], hist[k, hb + 1], hist[k, hb + 2]
                     (B0, B1, B2, c0, c1, c2, e0, e1, e2, n0, n1, n2, delta, h0, h1,
                      h2) = pair_force(g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, ri, rj, vi0,
                                       vi1, vi2, wi0, wi1, wi2, v[j, 0], v[j, 1], v[j, 2],
                                       omega[j, 0], omega[j, 1], omega[j, 2], h0, h1, h2, law,
                                       kn, gn, kt, gt, mu, fcoh, dcoh, friction, dt)
                     if friction:
-                        hist[k, 0] = h0
-                        hist[k, 1] = h1
-                        hist[k, 2] = h2
+                        hist[k, hb] = h0
+                        hist[k, hb + 1] = h1
+                        hist[k, hb + 2] = h2
                     F0 += B0
                     F1 += B1
                     F2 += B2
@@ -161,9 +165,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
                             _note_overlap(blk, b, delta, ri, rj, k)
                 if not touching:
                     if friction:
-                        hist[k, 0] = 0.0
-                        hist[k, 1] = 0.0
-                        hist[k, 2] = 0.0
+                        hist[k, :] = 0.0
                     if not scatter:
                         _no_reaction(_slot(k, j, jstart, jk), fr)
                     continue
@@ -194,7 +196,7 @@ def pair_forces(x, v, omega, u, radius, half, box, periodic, pi, pj, hist, law, 
                 friction, dt, f, torque, virial, record, rec_ij, rec):
     """Serial form: add pair contact forces and torques to ``f``/``torque`` and the
     virial to ``virial``, visiting pairs in list order (``hist`` (npairs, 3) with
-    friction); with ``record`` store the contacts in ``rec_ij``/``rec`` (see
+    friction, (npairs, 12) with end bonds: one spring per bond); with ``record`` store the contacts in ``rec_ij``/``rec`` (see
     :data:`REC_COLUMNS`; the point is absolute and may lie just outside the box).
 
     Returns ``(elastic energy, number of contacts)``: contacts are the pairs that carry
@@ -244,27 +246,31 @@ def pair_forces(x, v, omega, u, radius, half, box, periodic, pi, pj, hist, law, 
                 a0, a1, a2, g0, g1, g2 = spine_gap(d0, d1, d2, u[i, 0], u[i, 1], u[i, 2],
                                                    half[i], u[j, 0], u[j, 1], u[j, 2], half[j])
             dist2 = g0 * g0 + g1 * g1 + g2 * g2
-            if dist2 >= reach * reach:
-                continue
-            if once and kb > 0 and repeats_bond(d0, d1, d2, u[i, 0], u[i, 1], u[i, 2],
-                                                half[i], u[j, 0], u[j, 1], u[j, 2], half[j],
-                                                kb):
+            hb = 3 * kb  # the bond's spring in the pair's history row
+            if dist2 >= reach * reach or (
+                    once and kb > 0 and repeats_bond(d0, d1, d2, u[i, 0], u[i, 1], u[i, 2],
+                                                     half[i], u[j, 0], u[j, 1], u[j, 2],
+                                                     half[j], kb)):
+                if friction:
+                    hist[k, hb] = 0.0
+                    hist[k, hb + 1] = 0.0
+                    hist[k, hb + 2] = 0.0
                 continue
             nbt += 1
             h0 = 0.0
             h1 = 0.0
             h2 = 0.0
             if friction:
-                h0, h1, h2 = hist[k, 0], hist[k, 1], hist[k, 2]
+                h0, h1, h2 = hist[k, hb], hist[k, hb + 1], hist[k, hb + 2]
             (B0, B1, B2, c0, c1, c2, e0, e1, e2, n0, n1, n2, delta, h0, h1, h2) = pair_force(
                 g0, g1, g2, a0, a1, a2, d0, d1, d2, dist2, radius[i], radius[j], v[i, 0],
                 v[i, 1], v[i, 2], omega[i, 0], omega[i, 1], omega[i, 2], v[j, 0], v[j, 1],
                 v[j, 2], omega[j, 0], omega[j, 1], omega[j, 2], h0, h1, h2, law, kn, gn, kt,
                 gt, mu, fcoh, dcoh, friction, dt)
             if friction:
-                hist[k, 0] = h0
-                hist[k, 1] = h1
-                hist[k, 2] = h2
+                hist[k, hb] = h0
+                hist[k, hb + 1] = h1
+                hist[k, hb + 2] = h2
             if delta > 0.0:
                 pe += elastic_energy(law, kn, delta, radius[i] + radius[j])
             F0 += B0
@@ -297,9 +303,7 @@ def pair_forces(x, v, omega, u, radius, half, box, periodic, pi, pj, hist, law, 
                     rec[nc, 5] = n2
         if nbt == 0:
             if friction:
-                hist[k, 0] = 0.0
-                hist[k, 1] = 0.0
-                hist[k, 2] = 0.0
+                hist[k, :] = 0.0
             continue
         virial[0, 0] += d0 * F0
         virial[0, 1] += d0 * F1

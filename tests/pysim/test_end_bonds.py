@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pysim.contacts import REC_COLUMNS, pair_forces
-from pysim.forces import HARMONIC, SPINE_CONTACTS, contact_params
+from pysim.forces import HARMONIC, HOOKE, SPINE_CONTACTS, contact_params
 from pysim.simulation import ContactModel
 
 
@@ -166,13 +166,69 @@ def test_side_contact_stays_two_bonds_when_distinct():
     np.testing.assert_array_equal(tq, tq4)
 
 
-def test_end_bonds_are_frictionless_and_named():
-    with pytest.raises(ValueError, match="end_bonds' is frictionless"):
-        ContactModel("hooke", 1.0, mu=0.5, spine_contact="end_bonds")
-    with pytest.raises(ValueError, match="end_bonds_distinct' is frictionless"):
-        ContactModel("hooke", 1.0, mu=0.5, spine_contact="end_bonds_distinct")
+def test_end_bonds_are_named_and_keep_a_spring_per_bond():
     with pytest.raises(ValueError, match="valid: 'closest', 'end_bonds', 'end_bonds_distinct'$"):
         ContactModel("hooke", 1.0, spine_contact="sides")
+    assert ContactModel("hooke", 1.0, mu=0.5, spine_contact="end_bonds").spring_columns == 12
+    assert ContactModel("hooke", 1.0, mu=0.5).spring_columns == 3
+    assert ContactModel("hooke", 1.0, spine_contact="end_bonds").spring_columns == 0
+
+
+def frictional_pass(x, theta, v, w, hist, spine_contact, dt=1e-3, mu=0.5):
+    """One evaluation of the Hooke law with friction (k_t = 0.5, gamma_t = 0.1) for the
+    pair (0, 1) of 2-D rods of half-length 1 and radius 0.5; ``hist`` is updated."""
+    u = np.column_stack([np.cos(theta), np.sin(theta), np.zeros(2)])
+    f = np.zeros((2, 3))
+    tq = np.zeros((2, 3))
+    p = contact_params(1.0, 0.2, 0.5, 0.1, mu, end_bonds=SPINE_CONTACTS[spine_contact])
+    pair_forces(x, v, w, u, np.full(2, 0.5), np.full(2, 1.0), np.array([100.0, 100.0, 1.0]),
+                np.zeros(3, bool), np.array([0], np.int32), np.array([1], np.int32), hist,
+                HOOKE, p, True, dt, f, tq, np.zeros((3, 3)), False,
+                np.zeros((1, 2), np.int64), np.zeros((1, REC_COLUMNS)))
+    return f, tq
+
+
+def test_parallel_rods_sliding_hold_with_two_springs():
+    """Rod 1 slides along rod 0, side by side: its two end bonds each stretch a spring
+    of their own, so the pair's tangential force is twice the closest-point law's one
+    spring, and each bond's spring is the one the single-contact law gives it."""
+    x = np.array([[0.0, 0.0, 0.0], [0.5, 0.99, 0.0]])
+    v = np.array([[0.0, 0.0, 0.0], [0.3, 0.0, 0.0]])
+    w = np.zeros((2, 3))
+    h_ends = np.zeros((1, 12))
+    f_ends, _ = frictional_pass(x, np.zeros(2), v, w, h_ends, "end_bonds")
+    h_one = np.zeros((1, 3))
+    f_one, _ = frictional_pass(x, np.zeros(2), v, w, h_one, "closest")
+    assert f_one[0, 0] > 0  # rod 1 drags rod 0 along +x
+    assert f_ends[0, 0] == pytest.approx(2 * f_one[0, 0], rel=1e-12)
+    assert f_ends[0, 1] == pytest.approx(2 * f_one[0, 1], rel=1e-12)  # two normal bonds
+    # bonds 1 (rod 0's end at +1) and 2 (rod 1's end at -0.5) touch; 0 and 3 do not
+    np.testing.assert_allclose(h_ends[0, 3:6], h_one[0], rtol=1e-12)
+    np.testing.assert_allclose(h_ends[0, 6:9], h_one[0], rtol=1e-12)
+    assert not h_ends[0, :3].any() and not h_ends[0, 9:].any()
+
+
+def test_each_end_bond_keeps_its_own_history():
+    """Bond 1 of the pair (rod 0's end at +1) has slid before and holds a stretched
+    spring; bond 2 (rod 1's end at -0.75) has just formed: at rest the pair's tangential
+    force is bond 1's spring alone, the closest-point law's with that spring, and the new
+    bond's spring stays zero. A bond that leaves reach drops its spring alone, a pair
+    out of reach its whole row."""
+    x = np.array([[0.0, 0.0, 0.0], [0.25, 0.99, 0.0]])
+    v = np.zeros((2, 3))
+    hist = np.zeros((1, 12))
+    hist[0, 3:6] = [0.004, 0.0, 0.0]  # below the Coulomb cap (mu f_n = 0.005)
+    hist[0, 9:12] = [0.3, 0.0, 0.0]  # a stale spring on bond 3, out of reach
+    f_ends, _ = frictional_pass(x, np.zeros(2), v, v, hist, "end_bonds")
+    one = np.array([[0.004, 0.0, 0.0]])
+    f_one, _ = frictional_pass(x, np.zeros(2), v, v, one, "closest")
+    assert f_ends[0, 0] != 0.0 and f_ends[0, 0] == pytest.approx(f_one[0, 0], rel=1e-12)
+    np.testing.assert_allclose(hist[0, 3:6], [0.004, 0.0, 0.0], rtol=1e-12)
+    assert not hist[0, 6:9].any() and not hist[0, 9:12].any() and not hist[0, :3].any()
+    x2 = x.copy()
+    x2[1, 1] = 1.2  # out of reach: the whole row is dropped
+    frictional_pass(x2, np.zeros(2), v, v, hist, "end_bonds")
+    assert not hist.any()
 
 
 @pytest.mark.slow
@@ -229,9 +285,6 @@ def test_end_bonds_are_refused_in_three_dimensions():
      r"^gamma_n = nan is not allowed; use a finite number >= 0$"),
     ({"k_n": 1.0, "gamma_bg": float("inf")},
      r"^gamma_bg = inf is not allowed; use a finite number >= 0$"),
-    ({"k_n": 1.0, "mu": 0.5, "spine_contact": "end_bonds"},
-     r"^spine_contact 'end_bonds' is frictionless and cohesionless \(got mu = 0.5, f_coh = 0.0\); "
-     r"use mu = 0 and f_coh = 0, or spine_contact 'closest'$"),
 ])
 def test_contact_model_refuses_what_the_case_schema_refuses(kw, message):
     with pytest.raises(ValueError, match=message):
@@ -260,3 +313,36 @@ def test_set_spine_contact_gives_the_new_laws_forces_at_once(tmp_path):
     with pytest.raises(ValueError, match=r"^spine_contact 'end_bonds' is a 2-D law"):
         rods3.set_spine_contact("end_bonds")
     assert rods3.model.spine_contact == "closest"
+
+
+def _flat_stack_energy(rule):
+    """Kinetic over potential scale, ``KE / (M g D)``, of two flat rods of the cohesive-
+    deposit paper (d = 10, D = 0.05 m, Hertz k_n = 1e3, k_t = 100, mu = 0.5, dt = 5e-6 s)
+    dropped onto each other and a frictional base, after 1 s."""
+    from pysim import walls
+    from pysim.simulation import Simulation
+    from pysim.state import State
+
+    d, length, g = 0.05, 0.45, 10.0
+    x = np.array([[1.0, d / 2 + 0.01, 0.0], [1.07, d / 2 + 0.01 + 1.3 * d, 0.0]])
+    ang = np.array([0.01, -0.01])
+    axis = np.column_stack([np.cos(ang), np.sin(ang), np.zeros(2)])
+    st = State.create(x, d / 2, length, np.array([2.0, 2.0, 0.0]), axis=axis, density=5e-6,
+                      periodic=(False, False, False), dimension=2)
+    model = ContactModel("hertz", 1e3, 1.8347621556e-5, k_t=100.0, gamma_t=6.115873852e-6,
+                         mu=0.5, spine_contact=rule)
+    sim = Simulation(st, model, dt=5e-6, gravity=(0.0, -g, 0.0),
+                     planes=[walls.plane([0, 1, 0], [0, 0, 0])], skin=0.02)
+    sim.run(200_000)
+    s = sim.state
+    ke = 0.5 * np.sum(s.mass[:, None] * s.v**2) + 0.5 * np.sum(s.inertia[:, 0] * s.omega[:, 2]**2)
+    return ke / (np.sum(s.mass) * g * d)
+
+
+def test_flat_rods_come_to_rest_with_frictional_end_bonds():
+    """A rod lying on a rod: the closest point of two nearly parallel spines jumps from one
+    end of their overlap to the other as the top rod rocks, so under the closest-point law
+    the stack never rests (the fed deposits' kinetic-energy floor); with a spring at each
+    end bond (the spheropolygons' vertex-edge contacts) it comes to rest."""
+    assert _flat_stack_energy("end_bonds") < 1e-20
+    assert _flat_stack_energy("closest") > 1e-10

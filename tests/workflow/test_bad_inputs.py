@@ -64,8 +64,7 @@ CASES = [
     (("contact", "friction"), -0.1,
      "contact.friction = -0.1 is not allowed; use a number >= 0 and <= 10"),
     (("contact", "spine_contact"), "end_bonds_distinct",
-     "contact.spine_contact = end_bonds_distinct is for 2-D frictionless, cohesionless rods "
-     "(dimension 2, friction 0, no bond_number); got dimension 3, friction 0.0"),
+     "contact.spine_contact = end_bonds_distinct is for 2-D rods; got dimension 3"),
     (("contact", "spine_contact"), "sides",
      "contact.spine_contact = 'sides' is not allowed; use one of 'closest', 'end_bonds', "
      "'end_bonds_distinct'"),
