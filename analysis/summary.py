@@ -725,7 +725,12 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
       ``h_s_trace_rve`` and ``chi2_dof_trace_rve`` (``_trace_rve``);
     * ``apparent_mass_fraction``: vertical force on the base over the deposit's weight
       (1 without wall friction; Janssen: below 1; grain ``density`` per volume, per area
-      in 2-D), when ``base_wall_id`` names the base's rows in the contact table.
+      in 2-D), when ``base_wall_id`` names the base's rows in the contact table;
+      ``side_wall_fraction``: the upward force of the side walls (every other wall row)
+      on the grains over the weight (Janssen: above 0; negative when the walls' friction
+      holds the grains down); ``wall_balance``: base and side walls together over the
+      weight, 1 for a deposit at rest (below or above 1 by what the grains' last
+      accelerations leave unbalanced).
 
     Returns ``(rows, profile)``: rows ``(observable, value, uncertainty)`` and a table of
     the slab profile (``depth``, ``x``, ``phi``, ``sigma_vv``, ``sigma_hh``, ``pressure``,
@@ -827,7 +832,11 @@ def analyse_deposit(run_dir, width: float, gravity: float, slab: float, density:
         f_up = float(np.sum(contacts.force[on_base, v]))  # force on the grains from the base
         weight = density * float(np.sum(frame.particle_measures())) * gravity
         ok = on_base.any() and weight > 0  # tables without wall rows (LAMMPS) say nothing
-        rows.append(("apparent_mass_fraction", f_up / weight if ok else np.nan, np.nan))
+        on_sides = (contacts.j < 0) & ~on_base
+        f_sides = float(np.sum(contacts.force[on_sides, v]))
+        rows += [("apparent_mass_fraction", f_up / weight if ok else np.nan, np.nan),
+                 ("side_wall_fraction", f_sides / weight if ok else np.nan, np.nan),
+                 ("wall_balance", (f_up + f_sides) / weight if ok else np.nan, np.nan)]
     return rows, prof
 
 

@@ -100,6 +100,8 @@ def test_smooth_walls_put_the_whole_weight_on_the_base(deposits):
     # ke = 1e-6 of the peak (a fraction of a percent of g, as in the test above; seen
     # 0.9992 and 1.0020 for two summation orders of the same run)
     assert v["apparent_mass_fraction"] == pytest.approx(1.0, abs=0.01)
+    assert v["side_wall_fraction"] == 0.0
+    assert v["wall_balance"] == v["apparent_mass_fraction"]
     assert 0.3 < v["phi_deposit"] < 0.7
     # the weight loads the deposit from above: its major stress axes stand near vertical
     # (1 all vertical, 0 spread uniformly)
