@@ -44,7 +44,9 @@ class ContactModel:
     * ``gamma_bg``, ``gamma_rot``: background drag on translation (force/velocity) and
       rotation (torque/angular velocity).
     * wall contacts use ``k_n``, ``gamma_n``, ``k_t``, ``gamma_t`` with ``mu_wall``
-      (default ``mu``) and no cohesion.
+      (default ``mu``), and the grains' cohesion ``f_coh``, ``d_coh`` only with
+      ``wall_cohesion`` (walls that are particles of the grains' law, as the long fixed
+      spheropolygons of Hidalgo et al.).
     * ``spine_contact``: ``"closest"`` (science.md section 2: one contact at the closest
       points of the spines) or ``"end_bonds"`` (2-D rods: one bond from each spine end to
       the other spine, :func:`pysim.contacts.end_bond`, each a contact of the full law
@@ -76,6 +78,7 @@ class ContactModel:
     gamma_bg: float = 0.0
     gamma_rot: float = 0.0
     mu_wall: float | None = None
+    wall_cohesion: bool = False
     spine_contact: str = "closest"
     limit_damping: bool = False
     tangential_spring: str = "reset"
@@ -131,6 +134,9 @@ class ContactModel:
 
     def wall_params(self) -> np.ndarray:
         mu = self.mu if self.mu_wall is None else self.mu_wall
+        if self.wall_cohesion:
+            return contact_params(self.k_n, self.gamma_n, self.k_t, self.gamma_t, mu,
+                                  self.f_coh, self.d_coh)
         return contact_params(self.k_n, self.gamma_n, self.k_t, self.gamma_t, mu)
 
     def contact_time(self, m_eff: float) -> float:

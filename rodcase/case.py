@@ -382,6 +382,9 @@ def _check_case(case: dict, source: str, at: str):
     if pr["name"] == "growth" and pr["phi_grow"] >= pr["phi_max"]:
         raise ConfigError(f"{source}: {at}protocol.phi_grow = {pr['phi_grow']} must be below "
                           f"phi_max = {pr['phi_max']}")
+    if c.get("wall_cohesion", False) and pr["name"] != "deposit":
+        raise ConfigError(f"{source}: {at}contact.wall_cohesion is for the deposit protocol; "
+                          f"got protocol {pr['name']}")
     if c.get("spine_contact", "closest") != "closest" and dim != 2:
         raise ConfigError(f"{source}: {at}contact.spine_contact = {c['spine_contact']} is "
                           f"for 2-D rods; got dimension {dim}")

@@ -11,7 +11,8 @@ keeps a fixed set of particles). With ``protocol.rain_speed`` the rain is slowed
 as from a slow feed; then the drag is off. Side walls and base are flat, frictional walls with the
 grains' contact law (``contact.wall_friction``, default ``friction``). Cohesion: a
 constant attraction ``F_c = Bo_g m g`` (mean grain) between grains whose gap is below
-``d_c = cohesion_range D`` (:func:`cohesion`).
+``d_c = cohesion_range D`` (:func:`cohesion`), and between grains and walls with
+``contact.wall_cohesion``.
 
 **Feed** (``protocol.feed``, 2-D; the cohesive-deposit paper's protocol): instead of a
 column, grains enter one at a time at ``rate`` grains per unit time, grain ``k`` (in the
@@ -199,6 +200,7 @@ def simulation_from_case(case: dict, init: dict) -> Simulation:
     model = replace(model_from_case(case), f_coh=f_c, d_coh=d_c)
     if "wall_friction" in c:
         model = replace(model, mu_wall=c["wall_friction"])
+    model = replace(model, wall_cohesion=bool(c.get("wall_cohesion", False)))
     up = dim - 1
     w = case["container"]["width"]
     planes = []

@@ -484,3 +484,24 @@ def test_euler_integrators_refuse_deformation_and_unknown_names():
     with pytest.raises(ValueError, match=r"unknown integrator 'Euler'; valid: 'verlet', 'euler'"):
         sim.integrator = "Euler"
     assert sim.integrator == "euler"
+
+
+@pytest.mark.parametrize("wall_cohesion", [False, True])
+def test_cohesive_walls_pull_a_grain_within_the_range(wall_cohesion):
+    """A rod lying parallel to a base, its surface a third of the cohesion range above it:
+    with ``wall_cohesion`` each spine end's wall contact pulls with ``F_c`` (two ends, the
+    vertex contacts of a flat rod), without it the base does nothing; grains still
+    attract each other either way."""
+    f_c, d_c = 2.0e-3, 1.0e-3
+    model = ContactModel("hertz", 1e3, 0.0, f_coh=f_c, d_coh=d_c, wall_cohesion=wall_cohesion)
+    x = np.array([[1.0, 0.5 + d_c / 3, 0.0], [1.0, 0.5 + d_c / 3 + 1.0 + d_c / 3, 0.0]])
+    axis = np.tile([1.0, 0.0, 0.0], (2, 1))
+    st = State.create(x, 0.5, 1.0, np.array([4.0, 4.0, 0.0]), axis=axis,
+                      periodic=(False, False, False), dimension=2)
+    sim = Simulation(st, model, dt=1e-4, planes=[plane([0, 1, 0], [0, 0, 0])])
+    sim.compute_forces()
+    pull = -2 * f_c if wall_cohesion else 0.0
+    # rod 0: pulled down by the base and up by rod 1 (one closest-point contact)
+    assert sim.f[0, 1] == pytest.approx(pull + f_c, rel=1e-12, abs=1e-15)
+    assert sim.f[1, 1] == pytest.approx(-f_c, rel=1e-12)
+    assert sim.wall_force[0, 1] == pytest.approx(-pull, rel=1e-12, abs=1e-15)

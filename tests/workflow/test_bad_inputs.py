@@ -72,7 +72,9 @@ CASES = [
      "unknown key 'contact.stiffness'; allowed here: bond_number, bond_stiffening, cohesion_range, contact_time, "
      "friction, gamma_bg, gamma_n, "
      "gamma_rot, gamma_t, k_n, k_t, law, limit_damping, max_overlap, restitution, "
-     "spine_contact, tangential_spring, wall_friction"),
+     "spine_contact, tangential_spring, wall_cohesion, wall_friction"),
+    (("contact", "wall_cohesion"), True,
+     "contact.wall_cohesion is for the deposit protocol; got protocol compress"),
     (("protocol", "name"), "shake",
      "protocol.name = 'shake' is not allowed; use one of 'compress', 'growth', 'jammed', 'tapping', "
      "'deposit', 'ls', 'mls', 'fb'"),

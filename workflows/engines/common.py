@@ -96,6 +96,14 @@ def closest_contacts_only(engine: str, case: dict) -> str | None:
     return None
 
 
+def smooth_wall_cohesion(engine: str, case: dict) -> str | None:
+    """The peers' walls do not attract the grains."""
+    if case["contact"].get("wall_cohesion", False):
+        return (f"{engine}'s walls have no cohesion; contact.wall_cohesion (walls that "
+                "attract the grains) is pysim's only")
+    return None
+
+
 def reset_tangential_spring(engine: str, case: dict) -> str | None:
     """The peers cut the tangential spring back to the Coulomb limit when it slides."""
     if case["contact"].get("tangential_spring", "reset") != "reset":
@@ -123,8 +131,8 @@ def verlet_steps(engine: str, case: dict) -> str | None:
 
 
 #: what every peer engine refuses, checked in this order before its deck is looked up
-PEER_LIMITS = (closest_contacts_only, reset_tangential_spring, capped_preparation,
-               verlet_steps)
+PEER_LIMITS = (closest_contacts_only, smooth_wall_cohesion, reset_tangential_spring,
+               capped_preparation, verlet_steps)
 
 
 def inertial_only(engine: str, case: dict) -> str | None:
