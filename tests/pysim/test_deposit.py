@@ -51,6 +51,27 @@ def test_bond_number_sets_the_cohesive_force():
     assert cohesion(validate_case(DEP)) == (0.0, 0.0)
 
 
+def test_wall_cohesion_reaches_the_walls_and_only_pysim_runs_it(tmp_path):
+    """contact.wall_cohesion gives the deposit's walls the grains' F_c and d_c; the peer
+    engines skip such a case, naming the key."""
+    from pysim.forces import D_COH, F_COH
+    from pysim.protocols.deposit import simulation_from_case
+    from workflows.engines import supports
+
+    for on in (False, True):
+        case = validate_case(deposit_with(contact__bond_number=100.0,
+                                          contact__wall_cohesion=on))
+        write_initial(case, tmp_path / "init.data")
+        sim = simulation_from_case(case, read_particle_data(tmp_path / "init.data"))
+        f_c, d_c = cohesion(case)
+        assert sim.model.wall_cohesion is on and sim.model.f_coh == f_c
+        wp = sim.model.wall_params()
+        assert (wp[F_COH], wp[D_COH]) == ((f_c, d_c) if on else (0.0, 0.0))
+        assert supports("pysim", case) is None
+        for engine in ("lammps", "liggghts"):
+            assert ("contact.wall_cohesion" in (supports(engine, case) or "")) is on
+
+
 @pytest.fixture(scope="module")
 def deposits(tmp_path_factory):
     out = {}
