@@ -13,12 +13,13 @@ from tests.cases import FEED, changed
 from workflows.scripts import plot_janssen
 
 
-def _run(root, variant, width, n, bond, sigma_m=4.0, h_s=0.8):
+def _run(root, variant, width, n, bond, sigma_m=4.0, h_s=0.8, wall_cohesion=True):
     """A finished 2-D run folder of d = 10 rods with a Janssen-shaped element profile of
     the trace at every fifth slab."""
     case = validate_case(changed(FEED, particles__aspect_ratio=9.0, particles__n=n,
                                  container__width=width, contact__bond_number=bond,
                                  contact__cohesion_range=1e-4,
+                                 contact__wall_cohesion=wall_cohesion,
                                  protocol__feed__height=5000.0))
     seed = root / "deposit" / variant / "seed1"
     run = seed / "pysim"
@@ -38,7 +39,8 @@ def _run(root, variant, width, n, bond, sigma_m=4.0, h_s=0.8):
 def test_paper_fit_by_case_and_its_unmet_conditions(tmp_path, monkeypatch):
     runs = [_run(tmp_path, "paper_box", 200.0, 6000, 1e4),     # W = 20 rod lengths
             _run(tmp_path, "small_box", 50.0, 200, 0.0),
-            _run(tmp_path, "bo1000", 200.0, 6000, 1e3)]
+            _run(tmp_path, "bo1000", 200.0, 6000, 1e3),
+            _run(tmp_path, "inert_walls", 200.0, 6000, 1e4, wall_cohesion=False)]
     seen = {}
     monkeypatch.setattr(plot_janssen.plots, "janssen_against_paper",
                         lambda panels, out: seen.update(panels=panels))
@@ -53,6 +55,8 @@ def test_paper_fit_by_case_and_its_unmet_conditions(tmp_path, monkeypatch):
     assert any(u.startswith("width_over_length (ours 5") for u in small["unmet"])
     assert any(u.startswith("n (ours 200") for u in small["unmet"])
     assert panels["bo1000"]["paper"] is None  # the paper fits no profile at Bo_g = 1e3
+    # the paper's walls attract the grains: walls that do not are another condition
+    assert panels["inert_walls"]["paper"]["unmet"] == ["wall_cohesion (ours no, paper yes)"]
     (run,) = panels["paper_box"]["runs"]
     prof = pd.read_csv(runs[0] / "curves.csv")
     rows = prof.trace_rve.notna()  # the rows of elements, not the slabs between them

@@ -50,7 +50,14 @@ def test_case_terms():
     from analysis.vs_paper import unmet_conditions
     refs = read_references(ROOT / "references").set_index("id")
     row = refs.loc["hidalgo-04"]
-    assert unmet_conditions(t, row)[-1] == "grain_density (ours 1, paper unstated)"
+    assert unmet_conditions(t, row)[-2:] == ["grain_density (ours 1, paper unstated)",
+                                             "wall_cohesion (ours no, paper yes)"]
+    # the paper's walls are particles of the grains' law: cohesive where the grains are
+    dep["contact"]["wall_cohesion"] = True
+    assert case_terms(dep)["wall_cohesion"] == "yes"
+    dep["contact"] = {"law": "hertz"}
+    assert case_terms(dep)["wall_cohesion"] == "yes"  # no cohesion: nothing to differ
+    assert np.isnan(case_terms(CASE_TAP)["wall_cohesion"])
 
 
 def _results(tmp_path, n=1000, taps=2000, values=(0.75, 0.76)):
