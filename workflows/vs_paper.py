@@ -40,8 +40,9 @@ def case_terms(case: dict) -> dict:
     (``alpha``, ``d``, ``sigma``, ``e_n``, ``Gamma``, ``bo_g``) and the condition keys
     (``tap``, ``n``, ``dimension``, ``protocol``, ``rate``, ``friction``, ``law``,
     ``rod_contact``, ``compress_contact``, ``bidisperse``, ``container``,
-    ``width_over_length``, ``feed``, ``grain_density``, ``wall_cohesion``); ``nan``
-    where a term does not apply (the rod contact rules to spheres and disks).
+    ``width_over_length``, ``feed``, ``grain_density``, ``wall_cohesion``,
+    ``tangential_spring``); ``nan`` where a term does not apply (the rod contact rules
+    to spheres and disks, the tangential spring to frictionless grains).
     ``wall_cohesion`` is ``yes`` for a deposit whose walls attract the grains as the
     grains attract each other (``contact.wall_cohesion``, or no cohesion at all)."""
     nan = float("nan")
@@ -77,6 +78,9 @@ def case_terms(case: dict) -> dict:
         "width_over_length": (cont["width"] / length if cont and "width" in cont else nan),
         "feed": ("continuous" if "feed" in pr else "column") if deposit else nan,
         "grain_density": float(p.get("density", 1.0)),
+        "tangential_spring": (c.get("tangential_spring", "reset")
+                              if max(c.get("friction", 0.0), c.get("wall_friction", 0.0)) > 0
+                              else nan),
         "wall_cohesion": (("yes" if c.get("wall_cohesion", False)
                            or not c.get("bond_number", 0.0) > 0 else "no")
                           if deposit else nan),

@@ -20,6 +20,8 @@ def _run(root, variant, width, n, bond, sigma_m=4.0, h_s=0.8, wall_cohesion=True
                                  container__width=width, contact__bond_number=bond,
                                  contact__cohesion_range=1e-4,
                                  contact__wall_cohesion=wall_cohesion,
+                                 contact__spine_contact="end_bonds",
+                                 contact__tangential_spring="keep",
                                  protocol__feed__height=5000.0))
     seed = root / "deposit" / variant / "seed1"
     run = seed / "pysim"

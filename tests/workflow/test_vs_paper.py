@@ -50,8 +50,12 @@ def test_case_terms():
     from analysis.vs_paper import unmet_conditions
     refs = read_references(ROOT / "references").set_index("id")
     row = refs.loc["hidalgo-04"]
-    assert unmet_conditions(t, row)[-2:] == ["grain_density (ours 1, paper unstated)",
+    assert unmet_conditions(t, row)[-3:] == ["grain_density (ours 1, paper unstated)",
+                                             "rod_contact (ours closest, paper end_bonds)",
                                              "wall_cohesion (ours no, paper yes)"]
+    assert np.isnan(t["tangential_spring"])  # frictionless: nothing to check
+    dep["contact"]["friction"] = 0.5
+    assert case_terms(dep)["tangential_spring"] == "reset"
     # the paper's walls are particles of the grains' law: cohesive where the grains are
     dep["contact"]["wall_cohesion"] = True
     assert case_terms(dep)["wall_cohesion"] == "yes"
