@@ -158,6 +158,6 @@ def clear_failed(out) -> None:
 def ok_runs(run_dirs) -> list[Path]:
     """The run directories among ``run_dirs`` whose ``run.json`` has ``status: ok``, in
     their order, as paths: what the figures draw (failed runs are listed in
-    ``failures.csv`` instead)."""
-    return [Path(d) for d in run_dirs
-            if json.loads((Path(d) / "run.json").read_text()).get("status") == "ok"]
+    ``failures.csv`` instead; a run still going has no ``run.json`` yet)."""
+    return [Path(d) for d in run_dirs if (Path(d) / "run.json").is_file()
+            and json.loads((Path(d) / "run.json").read_text()).get("status") == "ok"]

@@ -175,6 +175,8 @@ def test_figures_draw_only_the_runs_that_succeeded(tmp_path):
         d.mkdir()
         (d / "run.json").write_text(f'{{"status": "{status}"}}')
         dirs.append(str(d))
+    (tmp_path / "running").mkdir()  # no run.json until it ends
+    dirs.append(str(tmp_path / "running"))
     assert ok_runs(dirs) == [tmp_path / "a", tmp_path / "c"]
 
 
