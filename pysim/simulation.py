@@ -134,10 +134,8 @@ class ContactModel:
 
     def wall_params(self) -> np.ndarray:
         mu = self.mu if self.mu_wall is None else self.mu_wall
-        if self.wall_cohesion:
-            return contact_params(self.k_n, self.gamma_n, self.k_t, self.gamma_t, mu,
-                                  self.f_coh, self.d_coh)
-        return contact_params(self.k_n, self.gamma_n, self.k_t, self.gamma_t, mu)
+        coh = (self.f_coh, self.d_coh) if self.wall_cohesion else (0.0, 0.0)
+        return contact_params(self.k_n, self.gamma_n, self.k_t, self.gamma_t, mu, *coh)
 
     def contact_time(self, m_eff: float) -> float:
         """Binary contact time of the linear law, ``t_c = pi / sqrt(k/m_eff -

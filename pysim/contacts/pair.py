@@ -131,9 +131,7 @@ def pair_pass(x, v, omega, u, radius, half, box, periodic, pj, istart, jstart, j
                             once and kb > 0 and repeats_bond(d0, d1, d2, ui0, ui1, ui2, hi,
                                                              uj0, uj1, uj2, hj, kb)):
                         if friction:
-                            hist[k, hb] = 0.0
-                            hist[k, hb + 1] = 0.0
-                            hist[k, hb + 2] = 0.0
+                            hist[k, hb:hb + 3] = 0.0
                         continue
                     touching = True
                     h0 = 0.0
@@ -196,8 +194,9 @@ def pair_forces(x, v, omega, u, radius, half, box, periodic, pi, pj, hist, law, 
                 friction, dt, f, torque, virial, record, rec_ij, rec):
     """Serial form: add pair contact forces and torques to ``f``/``torque`` and the
     virial to ``virial``, visiting pairs in list order (``hist`` (npairs, 3) with
-    friction, (npairs, 12) with end bonds: one spring per bond); with ``record`` store the contacts in ``rec_ij``/``rec`` (see
-    :data:`REC_COLUMNS`; the point is absolute and may lie just outside the box).
+    friction, (npairs, 12) with end bonds: one spring per bond); with ``record`` store
+    the contacts in ``rec_ij``/``rec`` (see :data:`REC_COLUMNS`; the point is absolute
+    and may lie just outside the box).
 
     Returns ``(elastic energy, number of contacts)``: contacts are the pairs that carry
     a force, touching (``delta > 0``) or, with cohesion, closer than ``d_c``.
@@ -252,9 +251,7 @@ def pair_forces(x, v, omega, u, radius, half, box, periodic, pi, pj, hist, law, 
                                                      half[i], u[j, 0], u[j, 1], u[j, 2],
                                                      half[j], kb)):
                 if friction:
-                    hist[k, hb] = 0.0
-                    hist[k, hb + 1] = 0.0
-                    hist[k, hb + 2] = 0.0
+                    hist[k, hb:hb + 3] = 0.0
                 continue
             nbt += 1
             h0 = 0.0

@@ -57,7 +57,8 @@ def model_from_case(case: dict) -> ContactModel:
                         gamma_rot=c.get("gamma_rot", gamma_bg * length**2 / 12.0),
                         spine_contact=c.get("spine_contact", "closest"),
                         limit_damping=c.get("limit_damping", False),
-                        tangential_spring=c.get("tangential_spring", "reset"))
+                        tangential_spring=c.get("tangential_spring", "reset"),
+                        wall_cohesion=c.get("wall_cohesion", False))
 
 
 def max_overlap(case: dict) -> float:

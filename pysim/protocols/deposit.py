@@ -200,7 +200,6 @@ def simulation_from_case(case: dict, init: dict) -> Simulation:
     model = replace(model_from_case(case), f_coh=f_c, d_coh=d_c)
     if "wall_friction" in c:
         model = replace(model, mu_wall=c["wall_friction"])
-    model = replace(model, wall_cohesion=bool(c.get("wall_cohesion", False)))
     up = dim - 1
     w = case["container"]["width"]
     planes = []
