@@ -104,7 +104,8 @@ def _run(case, init, args) -> int:
     from pysim.jit import get_threads
     from pysim.hard.cells import GridError
     from pysim.hard.edmd import DynamicsError
-    from pysim.protocols import compress, deposit, fb, growth, jammed, ls, mls, tapping
+    from pysim.protocols import (compress, deposit, fb, growth, jammed, ls, mls, quasistatic,
+                                 tapping)
     from pysim.protocols.contraction import ContractionJammedError
     from pysim.protocols.hard import StartError
     from pysim.protocols.output import ResumeError
@@ -113,7 +114,7 @@ def _run(case, init, args) -> int:
 
     args.out.mkdir(parents=True, exist_ok=True)
     driver = {"compress": compress, "growth": growth, "jammed": jammed,
-              "tapping": tapping, "deposit": deposit, "ls": ls, "mls": mls,
+              "quasistatic": quasistatic, "tapping": tapping, "deposit": deposit, "ls": ls, "mls": mls,
               "fb": fb}[case["protocol"]["name"]]
     try:
         summary = driver.run(case, init, args.out, progress=not args.no_progress,

@@ -348,7 +348,7 @@ def _check_case(case: dict, source: str, at: str):
             f"{source}: {at}protocol.phi_init = {pr['phi_init']} cannot be reached by random "
             f"insertion in {dim}-D; use a value <= {phi_insert} and compress")
     phi_end = {"compress": pr.get("phi_final"), "jammed": pr.get("phi_max"),
-               "growth": pr.get("phi_max")}.get(pr["name"], 0.75)
+               "quasistatic": pr.get("phi_max"), "growth": pr.get("phi_max")}.get(pr["name"], 0.75)
     _derive_contact(case, source, at)
     _stiffen_with_bond(case, source, at)
     _check_container(case, source, at)

@@ -34,6 +34,15 @@ def test_case_terms():
     paper_law["particles"]["aspect_ratio"] = 0.0  # disks have no spine: no rule to check
     t = case_terms(paper_law)
     assert np.isnan(t["rod_contact"]) and np.isnan(t["compress_contact"])
+    # a quasistatic compression is the rate's zero limit; the paper's phi_J rows ask for
+    # its continuous compression, so the protocol stays a condition that differs
+    qs = copy.deepcopy(CASE_2D)
+    qs["protocol"] = {"name": "quasistatic", "dphi": 1e-3}
+    t = case_terms(qs)
+    assert t["rate"] == 0.0 and t["protocol"] == "quasistatic"
+    from analysis.vs_paper import unmet_conditions
+    row = read_references(ROOT / "references").set_index("id").loc["marschall2018-02"]
+    assert [u.split(" ")[0] for u in unmet_conditions(t, row)] == ["protocol"]
     t = case_terms(CASE_TAP)
     assert t["family"] == "tapping" and t["e_n"] == 0.4 and t["Gamma"] == 2.0
     assert t["tap"] == 1000 and t["sigma"] == 0.0 and t["container"] == "cylinder"
