@@ -13,8 +13,14 @@ last unjammed packing in steps of ``dphi`` until the contact pressure reaches
 ``p(phi)`` of the run is what the paper fits: its first linear rise extrapolated to
 ``p = 0`` gives the sample's ``phi_J`` (:mod:`analysis.jamming`).
 
-The relaxations use ``contact.spine_contact``; a run checkpoints after every relaxation
-and resumes from the last one.
+``relaxation: minimise`` (the default) relaxes with the minimisers; ``relaxation:
+overdamped`` runs the paper's own dynamics at a fixed box instead (overdamped Heun steps
+with substrate drag ``k_d``, :meth:`Simulation.run_overdamped` at ``kappa = 0``) until
+``U/L^d`` is below ``energy_zero`` or falls by less than ``settle_rtol`` of itself over
+``check_every`` steps, so that the packing follows the path of a compression at
+vanishing rate rather than FIRE's inertial one. The relaxations use
+``contact.spine_contact``; a run checkpoints after every relaxation and resumes from the
+last one.
 """
 from __future__ import annotations
 
@@ -28,17 +34,41 @@ from pysim.protocols.output import RunFiles
 from pysim.simulation import BlowUpError, Simulation
 
 
-def step(sim: Simulation, goal: float, f_tol: float, max_relax: int, zero: float,
-         d_min: float) -> float:
-    """Shrink the box affinely to packing fraction ``goal`` and relax; returns ``U/L^d``
-    (lengths in units of ``d_min``). The relaxation stops as soon as ``U/L^d < zero``.
-    Rods under the closest-point law settle on the energy alone: its kink at parallel
-    contacts keeps residual forces no minimiser removes (:func:`relax`'s ``balance``)."""
+def relax_overdamped(sim: Simulation, k_d: float, zero: float, d_min: float,
+                     check_every: int, settle_rtol: float, max_steps: int) -> bool:
+    """Overdamped Heun steps at a fixed box until ``U/L^d < zero`` (unjammed) or it fell
+    by less than ``settle_rtol`` of itself over ``check_every`` steps (settled). Returns
+    whether it stopped so rather than after ``max_steps``."""
+    e_prev = energy_density(sim, d_min)
+    done = 0
+    while done < max_steps:
+        if e_prev < zero:
+            return True
+        sim.run_overdamped(check_every, k_d=k_d, kappa=0.0)
+        done += check_every
+        e = energy_density(sim, d_min)
+        if e_prev - e <= settle_rtol * e_prev:
+            return True
+        e_prev = e
+    return energy_density(sim, d_min) < zero
+
+
+def step(sim: Simulation, goal: float, protocol: dict, f_tol: float, d_min: float) -> float:
+    """Shrink the box affinely to packing fraction ``goal`` and relax it by the
+    protocol's ``relaxation``; returns ``U/L^d`` (lengths in units of ``d_min``). Either
+    relaxation stops as soon as ``U/L^d < energy_zero``. Rods under the closest-point law
+    settle on the energy alone under the minimisers: its kink at parallel contacts keeps
+    residual forces no minimiser removes (:func:`relax`'s ``balance``)."""
     s = sim.state
+    zero = protocol["energy_zero"]
     sim.rescale_box((s.packing_fraction() / goal) ** (1.0 / s.dimension))
-    kinked = sim.model.spine_contact == "closest" and bool((s.length > 0).any())
-    relax(sim, f_tol, max_relax, lambda t: energy_density(t, d_min) < zero,
-          balance=not kinked)
+    if protocol["relaxation"] == "overdamped":
+        relax_overdamped(sim, protocol["k_d"], zero, d_min, protocol["check_every"],
+                         protocol["settle_rtol"], protocol["max_steps"])
+    else:
+        kinked = sim.model.spine_contact == "closest" and bool((s.length > 0).any())
+        relax(sim, f_tol, protocol["max_relax"], lambda t: energy_density(t, d_min) < zero,
+              balance=not kinked)
     return energy_density(sim, d_min)
 
 
@@ -91,7 +121,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
                                   f"{p['pressure_final']} up to phi_max = {p['phi_max']} "
                                   f"(phi = {phi:.4f}); raise phi_max or check the case")
             trial = sim if fine else _copy(sim)
-            e = step(trial, goal, f_tol, p["max_relax"], zero, d_min)
+            e = step(trial, goal, p, f_tol, d_min)
             bar.update(1)
             bar.set_postfix(phi=f"{goal:.4f}", U=f"{e:.2e}", refresh=False)
             if not fine and e >= zero:
