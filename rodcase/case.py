@@ -225,6 +225,12 @@ def deep_merge(base: dict, override: dict) -> dict:
 
 
 # -- cases ----------------------------------------------------------------------------------
+def frictional(contact: dict) -> bool:
+    """Whether a ``contact`` block has friction between grains or at the walls (then a
+    tangential spring is needed)."""
+    return max(contact.get("friction", 0.0), contact.get("wall_friction", 0.0)) > 0
+
+
 def contact_time(k_n: float, gamma_n: float, m_eff: float) -> float:
     """Binary contact time of the linear spring-dashpot (science.md section 3):
     ``t_c = pi / sqrt(k/m_eff - (gamma/(2 m_eff))^2)``; the undamped value if overdamped."""
@@ -469,8 +475,7 @@ def _derive_contact(case: dict, source: str, at: str):
         if "k_n" not in c:
             raise ConfigError(f"{source}: {at}contact.k_n is required (or give restitution and "
                               "contact_time)")
-        frictional = max(c.get("friction", 0.0), c.get("wall_friction", 0.0)) > 0
-        if frictional and c["law"] == "hooke" and not c.get("k_t", 0.0) > 0:
+        if frictional(c) and c["law"] == "hooke" and not c.get("k_t", 0.0) > 0:
             # the linear law's usual tangential spring (equal normal and tangential
             # periods of a sphere contact), and half the normal damping
             c["k_t"] = KT_PER_KN * c["k_n"]
@@ -483,7 +488,7 @@ def _derive_contact(case: dict, source: str, at: str):
     m = p["density"] * particle_measure(p["diameter"]["mean"], p["aspect_ratio"], p["dimension"])
     k_n, gamma_n = restitution_law(c["restitution"], c["contact_time"], 0.5 * m)
     derived = {"k_n": k_n, "gamma_n": gamma_n}
-    if max(c.get("friction", 0.0), c.get("wall_friction", 0.0)) > 0:
+    if frictional(c):
         derived["k_t"] = c["k_t"] if c.get("k_t", 0.0) > 0 else KT_PER_KN * k_n
         derived["gamma_t"] = c["gamma_t"] if c.get("gamma_t", 0.0) > 0 else GT_PER_GN * gamma_n
     for key in ("k_n", "gamma_n"):

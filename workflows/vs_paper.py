@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from analysis.vs_paper import POINT, match, read_references, verdict_counts
-from rodcase.case import read_yaml
+from rodcase.case import frictional, read_yaml
 
 #: the notebook of each study family
 STUDY_DOCS = {"tapping": "tapping.md", "deposition": "deposition.md",
@@ -80,9 +80,7 @@ def case_terms(case: dict) -> dict:
         "width_over_length": (cont["width"] / length if cont and "width" in cont else nan),
         "feed": ("continuous" if "feed" in pr else "column") if deposit else nan,
         "grain_density": float(p.get("density", 1.0)),
-        "tangential_spring": (c.get("tangential_spring", "reset")
-                              if max(c.get("friction", 0.0), c.get("wall_friction", 0.0)) > 0
-                              else nan),
+        "tangential_spring": c.get("tangential_spring", "reset") if frictional(c) else nan,
         "wall_cohesion": (("yes" if c.get("wall_cohesion", False)
                            or not c.get("bond_number", 0.0) > 0 else "no")
                           if deposit else nan),

@@ -76,8 +76,8 @@ CASES = [
     (("contact", "wall_cohesion"), True,
      "contact.wall_cohesion is for the deposit protocol; got protocol compress"),
     (("protocol", "name"), "shake",
-     "protocol.name = 'shake' is not allowed; use one of 'compress', 'growth', 'jammed', 'tapping', "
-     "'deposit', 'ls', 'mls', 'fb'"),
+     "protocol.name = 'shake' is not allowed; use one of 'compress', 'growth', 'jammed', "
+     "'quasistatic', 'tapping', 'deposit', 'ls', 'mls', 'fb'"),
     (("protocol", "name"), DROP, "missing key 'protocol.name'"),
     (("protocol", "phi_init"), 0.5, "protocol.phi_init = 0.5 cannot be reached by random "
                                     "insertion in 3-D; use a value <= 0.35 and compress"),
