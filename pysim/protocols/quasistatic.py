@@ -56,9 +56,8 @@ def relax_overdamped(sim: Simulation, k_d: float, zero: float, d_min: float,
 def step(sim: Simulation, goal: float, protocol: dict, f_tol: float, d_min: float) -> float:
     """Shrink the box affinely to packing fraction ``goal`` and relax it by the
     protocol's ``relaxation``; returns ``U/L^d`` (lengths in units of ``d_min``). Either
-    relaxation stops as soon as ``U/L^d < energy_zero``. Rods under the closest-point law
-    settle on the energy alone under the minimisers: its kink at parallel contacts keeps
-    residual forces no minimiser removes (:func:`relax`'s ``balance``)."""
+    relaxation stops as soon as ``U/L^d < energy_zero``. (The case check refuses the
+    minimisers for rods under the closest-point law: they stall on its kink.)"""
     s = sim.state
     zero = protocol["energy_zero"]
     sim.rescale_box((s.packing_fraction() / goal) ** (1.0 / s.dimension))
@@ -66,9 +65,7 @@ def step(sim: Simulation, goal: float, protocol: dict, f_tol: float, d_min: floa
         relax_overdamped(sim, protocol["k_d"], zero, d_min, protocol["check_every"],
                          protocol["settle_rtol"], protocol["max_steps"])
     else:
-        kinked = sim.model.spine_contact == "closest" and bool((s.length > 0).any())
-        relax(sim, f_tol, protocol["max_relax"], lambda t: energy_density(t, d_min) < zero,
-              balance=not kinked)
+        relax(sim, f_tol, protocol["max_relax"], lambda t: energy_density(t, d_min) < zero)
     return energy_density(sim, d_min)
 
 

@@ -134,3 +134,14 @@ def test_overdamped_relaxation_unjams_below_and_settles_above(tmp_path):
     assert energy_density(dense, 1.0) == pytest.approx(e, rel=1e-4)  # it had settled
     fire, _ = squeezed(0.9, "minimise")
     assert dense.thermo().pressure == pytest.approx(fire.thermo().pressure, rel=0.05)
+
+
+def test_minimisers_refused_for_rods_under_the_closest_point_law():
+    """FIRE and L-BFGS stall on the kink of the closest-point law: the case check sends
+    rods under it to the overdamped relaxation or a smooth law."""
+    rods = dict(DISKS, particles=dict(DISKS["particles"], aspect_ratio=1.0, n=256),
+                contact=dict(DISKS["contact"], spine_contact="closest"))
+    with pytest.raises(ConfigError, match="relaxation: overdamped"):
+        validate_case(rods)
+    validate_case(dict(rods, protocol=dict(rods["protocol"], relaxation="overdamped")))
+    validate_case(dict(rods, contact=dict(rods["contact"], spine_contact="end_bonds")))
