@@ -114,8 +114,8 @@ def _run(case, init, args) -> int:
 
     args.out.mkdir(parents=True, exist_ok=True)
     driver = {"compress": compress, "growth": growth, "jammed": jammed,
-              "quasistatic": quasistatic, "tapping": tapping, "deposit": deposit, "ls": ls, "mls": mls,
-              "fb": fb}[case["protocol"]["name"]]
+              "quasistatic": quasistatic, "tapping": tapping, "deposit": deposit, "ls": ls,
+              "mls": mls, "fb": fb}[case["protocol"]["name"]]
     try:
         summary = driver.run(case, init, args.out, progress=not args.no_progress,
                              resume=args.resume, checkpoint_every=args.checkpoint_every)

@@ -354,7 +354,8 @@ def _check_case(case: dict, source: str, at: str):
             f"{source}: {at}protocol.phi_init = {pr['phi_init']} cannot be reached by random "
             f"insertion in {dim}-D; use a value <= {phi_insert} and compress")
     phi_end = {"compress": pr.get("phi_final"), "jammed": pr.get("phi_max"),
-               "quasistatic": pr.get("phi_max"), "growth": pr.get("phi_max")}.get(pr["name"], 0.75)
+               "quasistatic": pr.get("phi_max"),
+               "growth": pr.get("phi_max")}.get(pr["name"], 0.75)
     _derive_contact(case, source, at)
     _stiffen_with_bond(case, source, at)
     _check_container(case, source, at)
@@ -388,7 +389,8 @@ def _check_case(case: dict, source: str, at: str):
     if pr["name"] == "growth" and pr["phi_grow"] >= pr["phi_max"]:
         raise ConfigError(f"{source}: {at}protocol.phi_grow = {pr['phi_grow']} must be below "
                           f"phi_max = {pr['phi_max']}")
-    if (pr["name"] == "quasistatic" and alpha > 0 and c.get("spine_contact", "closest") == "closest"
+    if (pr["name"] == "quasistatic" and alpha > 0
+            and c.get("spine_contact", "closest") == "closest"
             and pr.get("relaxation", "minimise") == "minimise"):
         # measured: a FIRE-relaxed step of 1024 rods of alpha 1 at p = 1e-3 lost 80 % of its
         # pressure under 1e6 more overdamped steps (docs/studies/jamming_2d.md)

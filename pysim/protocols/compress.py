@@ -24,7 +24,7 @@ from tqdm import tqdm
 
 from pysim import io
 from pysim.protocols.output import ResumeError, RunFiles  # noqa: F401 (ResumeError re-exported)
-from pysim.simulation import BlowUpError, ContactModel, Simulation
+from pysim.simulation import ContactModel, Simulation
 from pysim.state import State
 
 
@@ -123,7 +123,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     steps_at_start = s.step
     bar = tqdm(total=int(ends[-1]), initial=s.step, disable=not progress, unit="step",
                mininterval=1.0, desc="pysim compress", dynamic_ncols=True)
-    try:
+    with files.guard(bar):
         if not resume:
             files.dump(sim)
             files.checkpoint(sim)
@@ -152,11 +152,6 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
             else:
                 continue
             break  # pressure_final reached
-    except BlowUpError as exc:
-        raise BlowUpError(f"{exc}; the last good checkpoint is {files.ckpt}") from None
-    finally:
-        bar.close()
-        files.close()
     wall = time.perf_counter() - t0
     files.finalize()
     th = sim.thermo()

@@ -49,7 +49,7 @@ from tqdm import tqdm
 from pysim import walls
 from pysim.protocols.compress import max_overlap, model_from_case
 from pysim.protocols.output import RunFiles
-from pysim.simulation import BlowUpError, Simulation
+from pysim.simulation import Simulation
 from pysim.state import State
 
 
@@ -261,7 +261,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     settled = False
     bar = tqdm(total=max_steps, initial=s.step, disable=not progress, unit="step",
                mininterval=1.0, desc="pysim deposit", dynamic_ncols=True)
-    try:
+    with files.guard(bar):
         if not resume:
             th = sim.thermo()
             drv["peak"] = th.ke
@@ -308,11 +308,6 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
             if time.perf_counter() - last_ckpt > checkpoint_every:
                 files.checkpoint(sim, drv)
                 last_ckpt = time.perf_counter()
-    except BlowUpError as exc:
-        raise BlowUpError(f"{exc}; the last good checkpoint is {files.ckpt}") from None
-    finally:
-        bar.close()
-        files.close()
     if fed and not settled:
         th = sim.thermo()
         why = (f"only {s.n} of {n_all} grains were fed" if s.n < n_all else

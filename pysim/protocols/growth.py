@@ -39,7 +39,7 @@ from pysim.protocols.contraction import contract
 from pysim.protocols.compress import max_overlap, model_from_case, state_from_init
 from pysim.protocols.jammed import relax, residuals
 from pysim.protocols.output import RunFiles
-from pysim.simulation import BlowUpError, Simulation
+from pysim.simulation import Simulation
 
 CYCLES_HEADER = ("# step phi pe_per_particle pressure n_contacts jammed iterations residual "
                  "settled\n")
@@ -180,7 +180,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
                                   f"{int(settled)}\n")
         bar.set_postfix(phi=f"{th.phi:.5f}", e=f"{e:.2g}", jammed=int(jammed), refresh=False)
 
-    try:
+    with files.guard(bar):
         if drv["phase"] == "grow":
             if s.step == 0:
                 files.dump(sim)
@@ -235,11 +235,6 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
                 drv["lo"] = phi if drv["lo"] is None else max(drv["lo"], phi)
                 checkpoint.save(sim, lo_path)
             files.checkpoint(sim, drv)
-    except BlowUpError as exc:
-        raise BlowUpError(f"{exc}; the last good checkpoint is {files.ckpt}") from None
-    finally:
-        bar.close()
-        files.close()
     files.finalize()
     lo_path.unlink(missing_ok=True)
     wall = time.perf_counter() - t0

@@ -351,7 +351,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
         files.thermo(sim_.thermo().row())
         files.dump(sim_)
 
-    try:
+    with files.guard(bar):
         if not resume:
             files.dump(sim)
         while drv["phase"] == "compress":
@@ -407,11 +407,6 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
                 checkpoint.save(low, low_file)
             files.checkpoint(sim, drv)
         low_file.unlink(missing_ok=True)
-    except BlowUpError as exc:
-        raise BlowUpError(f"{exc}; the last good checkpoint is {files.ckpt}") from None
-    finally:
-        bar.close()
-        files.close()
     e = energy_density(sim, d_min)
     balanced = bool(drv.get("balanced", False))
     result = {"phi_j": s.packing_fraction(), "energy_density": e, "converged": False,

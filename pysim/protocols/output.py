@@ -9,11 +9,13 @@ the resumed run writes exactly the bytes an uninterrupted run would have written
 from __future__ import annotations
 
 import os
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
 from pysim import checkpoint, io
+from pysim.simulation import BlowUpError
 
 OUTPUTS = ("particles.dump", "contacts.dump", "thermo.dat")
 CHECKPOINT = "checkpoint.npz"
@@ -115,6 +117,18 @@ class RunFiles:
         checkpoint.save(sim, self.ckpt, extra={"files": sizes, "driver": driver or {}})
 
     # -- closing -------------------------------------------------------------------------
+    @contextmanager
+    def guard(self, bar):
+        """The body of a run: closes the progress ``bar`` and the files however it ends,
+        and a :class:`BlowUpError` leaves naming the last good checkpoint."""
+        try:
+            yield
+        except BlowUpError as exc:
+            raise BlowUpError(f"{exc}; the last good checkpoint is {self.ckpt}") from None
+        finally:
+            bar.close()
+            self.close()
+
     def close(self):
         for f in self.fh.values():
             if not f.closed:

@@ -50,7 +50,7 @@ def relax_overdamped(sim: Simulation, k_d: float, zero: float, d_min: float,
         if e_prev - e <= settle_rtol * e_prev:
             return True
         e_prev = e
-    return energy_density(sim, d_min) < zero
+    return e_prev < zero
 
 
 def step(sim: Simulation, goal: float, protocol: dict, f_tol: float, d_min: float) -> float:
@@ -100,7 +100,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
         files.dump(sim_)
         files.checkpoint(sim_, drv)
 
-    try:
+    with files.guard(bar):
         if not resume:
             sim.compute_forces()
             files.thermo(sim.thermo().row())
@@ -128,11 +128,6 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
                 continue
             sim = trial
             keep(sim)
-    except BlowUpError as exc:
-        raise BlowUpError(f"{exc}; the last good checkpoint is {files.ckpt}") from None
-    finally:
-        bar.close()
-        files.close()
     files.finalize()
     s = sim.state
     return {"steps": s.step, "wall_seconds": time.perf_counter() - t0,

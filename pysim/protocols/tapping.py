@@ -51,7 +51,7 @@ from pysim import io, walls
 from pysim.protocols.compress import max_overlap, model_from_case
 from pysim.protocols.deposit import grain_mass
 from pysim.protocols.output import RunFiles
-from pysim.simulation import BlowUpError, Simulation
+from pysim.simulation import Simulation
 from pysim.state import State
 
 
@@ -256,7 +256,7 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
     bar = tqdm(total=tp.end if tp else None, initial=s.step, disable=not progress, unit="step",
                mininterval=1.0, desc="pysim tapping", dynamic_ncols=True)
     fresh = not resume  # a checkpoint before the first step
-    try:
+    with files.guard(bar):
         if tp is None:
             sim.set_drag(0.0, 0.0)
             if fresh:
@@ -299,11 +299,6 @@ def run(case: dict, init: dict, out_dir, progress: bool = True, resume: bool = F
             if time.perf_counter() - last_ckpt > checkpoint_every:
                 files.checkpoint(sim, driver_out)
                 last_ckpt = time.perf_counter()
-    except BlowUpError as exc:
-        raise BlowUpError(f"{exc}; the last good checkpoint is {files.ckpt}") from None
-    finally:
-        bar.close()
-        files.close()
     wall = time.perf_counter() - t0
     files.finalize()
     done = s.step - steps_at_start
