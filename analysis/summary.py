@@ -125,13 +125,14 @@ def z_at_jamming(curves: pd.DataFrame, phi_j: float, p_max: float) -> dict:
     rattler-free backbone and whose contact pressure is at most ``p_max`` (the top of the
     jamming-fit window: the first rise, where ``phi_J`` was fitted), and at least the
     first two such frames (a local line: further up, ``z(phi)`` bends).
-    From two or more, ``z_j``, ``z_j_bonds`` and ``rattler_fraction_j`` are the
-    least-squares line through them in ``phi`` at ``phi_J``, as ``phi_J`` is the line
+    From two or more, ``z_j``, ``z_j_bonds``, ``z_j_with_rattlers`` and
+    ``rattler_fraction_j`` are the least-squares line through them in ``phi`` at ``phi_J``, as ``phi_J`` is the line
     ``p(phi)`` of the same rise at ``p = 0`` (with the standard error of the intercept
     from three frames on; the fraction clipped to [0, 1]); ``phi_at_z_j = phi_J``. With
     one frame, that frame's values at its own ``phi_at_z_j``; with none, NaN.
-    ``z_j_with_rattlers`` and ``s_nematic_j``, which every frame has, are interpolated
-    linearly at ``phi_J``. ``z_j_frames``: the frames used. Below ``phi_J`` the packing
+    ``s_nematic_j``, which every frame has, is interpolated linearly at ``phi_J``; the
+    contact number with rattlers is not, since it jumps at ``phi_J`` (a frame just below
+    holds the flowing packing's few contacts). ``z_j_frames``: the frames used. Below ``phi_J`` the packing
     flows: the limit is taken from above. (The first frame above ``phi_J`` that keeps a
     backbone, read as it is, may lie far above jamming and overstate ``z_J``:
     docs/analysis.md.)
@@ -141,11 +142,10 @@ def z_at_jamming(curves: pd.DataFrame, phi_j: float, p_max: float) -> dict:
     if not np.isfinite(phi_j) or not len(curves):
         return out
     c = curves.sort_values("phi", kind="stable")
-    for name, col in (("z_j_with_rattlers", "z"), ("s_nematic_j", "s_nematic")):
-        v = c[col].to_numpy(dtype=float)
-        ok = np.isfinite(v)
-        if ok.any() and c.phi[ok].min() <= phi_j <= c.phi[ok].max():
-            out[name] = (float(np.interp(phi_j, c.phi[ok], v[ok])), np.nan)
+    v = c["s_nematic"].to_numpy(dtype=float)
+    ok = np.isfinite(v)
+    if ok.any() and c.phi[ok].min() <= phi_j <= c.phi[ok].max():
+        out["s_nematic_j"] = (float(np.interp(phi_j, c.phi[ok], v[ok])), np.nan)
     above = c[(c.phi >= phi_j) & (c.n_rattlers < c.n)]
     use = above[above.pressure <= p_max].iloc[:JAMMED_FRAMES]
     if len(use) < 2:
@@ -157,11 +157,13 @@ def z_at_jamming(curves: pd.DataFrame, phi_j: float, p_max: float) -> dict:
         first = use.iloc[0]
         out.update(z_j=(float(first.z_rattler_free), np.nan),
                    z_j_bonds=(float(first.z_bonds), np.nan),
+                   z_j_with_rattlers=(float(first.z), np.nan),
                    rattler_fraction_j=(float(first.n_rattlers / first.n), np.nan),
                    phi_at_z_j=(float(first.phi), np.nan))
         return out
     dphi = use.phi.to_numpy() - phi_j
-    for name, col in (("z_j", "z_rattler_free"), ("z_j_bonds", "z_bonds")):
+    for name, col in (("z_j", "z_rattler_free"), ("z_j_bonds", "z_bonds"),
+                      ("z_j_with_rattlers", "z")):
         out[name] = _intercept(dphi, use[col].to_numpy(dtype=float))
     frac = use.n_rattlers.to_numpy() / use.n.to_numpy()
     out["rattler_fraction_j"] = (float(np.clip(_intercept(dphi, frac)[0], 0.0, 1.0)), np.nan)

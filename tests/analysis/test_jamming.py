@@ -107,8 +107,10 @@ def test_z_j_skips_frames_without_a_backbone(tmp_path, monkeypatch):
     assert got["phi_at_z_j"] == phi_j and got["z_j_frames"] == 2
     # 80 and 20 rattlers of 500 on the same line
     assert got["rattler_fraction_j"] == pytest.approx(0.16 + 0.12 / 0.008 * (0.632 - phi_j))
-    # every frame has z with rattlers: interpolated between 0.6301 and 0.632
-    assert got["z_j_with_rattlers"] == pytest.approx(np.interp(phi_j, curves.phi, curves.z))
+    # z with rattlers jumps at phi_J: from the same two frames above it, not interpolated
+    # across the jump from the flowing frame at 0.6301
+    assert got["z_j_with_rattlers"] == pytest.approx(5.6 - 0.6 / 0.008 * (0.632 - phi_j),
+                                                     rel=1e-12)
 
 
 def jammed_curves(phi, law, p_slope=0.5, phi_j=0.56, n=1000, backbone_from=None):
@@ -144,8 +146,9 @@ def test_z_j_is_extrapolated_to_the_jamming_point():
     assert got["z_j_frames"][0] == 3  # the nearest three of phi 0.562 ... 0.586 (p <= p_max)
     assert got["rattler_fraction_j"][0] == pytest.approx(0.05)
     assert got["s_nematic_j"][0] == pytest.approx(0.056)
-    # with rattlers, z exists at every frame: interpolated between 0.558 and 0.562
-    assert got["z_j_with_rattlers"][0] == pytest.approx(0.5 * (2.0 + law(0.562) + 0.3))
+    # with rattlers, from the same frames: the line's 4.6, where interpolating between
+    # 0.558 (flowing, 2.0) and 0.562 would read 3.34
+    assert got["z_j_with_rattlers"][0] == pytest.approx(4.3 + 0.3, abs=1e-9)
     late = jammed_curves(phi, law, backbone_from=0.585)
     got = z_at_jamming(late, 0.56, p_max=0.014)
     assert law(0.586) == pytest.approx(5.34)
@@ -169,6 +172,7 @@ def test_z_j_from_one_frame_is_read_at_that_frame():
     curves = jammed_curves([0.55, 0.57], lambda f: np.full_like(f, 4.9))
     got = z_at_jamming(curves, 0.56, p_max=1.0)
     assert got["z_j"][0] == 4.9 and got["phi_at_z_j"][0] == 0.57 and got["z_j_frames"][0] == 1
+    assert got["z_j_with_rattlers"][0] == pytest.approx(5.2)
     none = z_at_jamming(curves.iloc[:1], 0.56, p_max=1.0)
     assert np.isnan(none["z_j"][0]) and np.isnan(none["phi_at_z_j"][0])
     assert np.isnan(z_at_jamming(curves, np.nan, p_max=1.0)["z_j"][0])
