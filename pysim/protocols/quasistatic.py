@@ -9,7 +9,8 @@ energy settles, stopping early once ``U/L^d`` is below ``energy_zero``). The fir
 step whose relaxed packing keeps energy is undone, and the compression goes on from the
 last unjammed packing in steps of ``dphi`` until the contact pressure reaches
 ``pressure_final`` (units of ``k_n / D^(d-1)``). Each kept relaxation is one row of
-``thermo.dat`` and one frame of the dumps (``step`` counts the relaxations), so
+``thermo.dat`` and one frame of the dumps (``step`` counts the relaxations, plus the
+Heun steps of overdamped ones), so
 ``p(phi)`` of the run is what the paper fits: its first linear rise extrapolated to
 ``p = 0`` gives the sample's ``phi_J`` (:mod:`analysis.jamming`).
 
@@ -18,7 +19,9 @@ overdamped`` runs the paper's own dynamics at a fixed box instead (overdamped He
 with substrate drag ``k_d``, :meth:`Simulation.run_overdamped` at ``kappa = 0``) until
 ``U/L^d`` is below ``energy_zero`` or falls by less than ``settle_rtol`` of itself over
 ``check_every`` steps, so that the packing follows the path of a compression at
-vanishing rate rather than FIRE's inertial one. The relaxations use
+vanishing rate rather than FIRE's inertial one. A relaxation cut off after ``max_steps``
+with ``U/L^d`` still above ``energy_zero`` counts as jammed (``max_steps`` Heun steps
+per ``dphi`` is a compression at about ``dphi / (2 phi max_steps dt)``). The relaxations use
 ``contact.spine_contact``; a run checkpoints after every relaxation and resumes from the
 last one.
 """
