@@ -2,8 +2,10 @@
 
 During a compression the contact pressure stays near zero below jamming and rises
 linearly above it (linear contacts). Fit ``p = a (phi - phi_J)`` to the first
-stretch of ``p(phi)`` inside a pressure window ``[p_lo, p_hi]`` and report the
-extrapolation ``phi_J`` with its standard error (science.md section 5).
+stretch of ``p(phi)`` inside a pressure window ``[p_lo, p_hi]``, up to the first plastic
+drop of the pressure (Marschall & Teitel 2018, Sec. III.B: the linear part "before there
+occurs any plastic rearrangements"), and report the extrapolation ``phi_J`` with its
+standard error (science.md section 5).
 """
 from __future__ import annotations
 
@@ -17,13 +19,21 @@ class JammingFitError(ValueError):
     """The pressure curve does not contain a usable linear rise."""
 
 
-def first_rise(p: np.ndarray, p_lo: float, p_hi: float) -> slice:
+#: a fall of the pressure from one row to the next by more than this fraction ends the
+#: first rise: a plastic rearrangement. Smaller dips are the rows' noise in a compression
+#: at a finite rate (quasistatic steps have none, and their drops are 10-20 %)
+DROP = 0.05
+
+
+def first_rise(p: np.ndarray, p_lo: float, p_hi: float, drop: float = DROP) -> slice:
     """Rows of the first rise through ``[p_lo, p_hi]``.
 
     A rise starts below ``p_lo``: rows before the first one with ``p < p_lo`` (a
     pressure still relaxing from an earlier, faster stage) are skipped. It ends at the
     first later row with ``p >= p_hi`` and starts after the last row before it with
     ``p < p_lo``, so that pressure spikes of the unjammed, flowing state are ignored.
+    A row whose pressure is below ``(1 - drop)`` times the row before it ends the rise
+    earlier, at that row before it: the fit stops at the first plastic drop.
     """
     p = np.asarray(p, dtype=np.float64)
     low = np.flatnonzero(p < p_lo)
@@ -39,6 +49,9 @@ def first_rise(p: np.ndarray, p_lo: float, p_hi: float) -> slice:
     end = above[0]
     below = np.flatnonzero(p[:end] < p_lo)
     start = below[-1] + 1 if len(below) else 0
+    falls = np.flatnonzero(p[start + 1:end + 1] < (1.0 - drop) * p[start:end])
+    if len(falls):
+        end = start + falls[0]
     return slice(start, end + 1)
 
 
