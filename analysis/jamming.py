@@ -44,8 +44,9 @@ def first_rise(p: np.ndarray, p_lo: float, p_hi: float, drop: float = DROP) -> s
     above = np.flatnonzero(p[low[0]:] >= p_hi) + low[0]
     if len(above) == 0:
         raise JammingFitError(f"pressure never reaches the top of the fit window "
-                              f"p_hi = {p_hi:.3g} (max {np.nanmax(p):.3g}); compress further "
-                              "or lower the window")
+                              f"p_hi = {p_hi:.3g} after falling below p_lo (max "
+                              f"{np.nanmax(p[low[0]:]):.3g}); compress further or lower the "
+                              "window")
     end = above[0]
     below = np.flatnonzero(p[:end] < p_lo)
     start = below[-1] + 1 if len(below) else 0

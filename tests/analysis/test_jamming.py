@@ -59,6 +59,9 @@ def test_the_rise_ends_at_the_first_plastic_drop():
 def test_no_rise_is_a_clear_error():
     with pytest.raises(JammingFitError, match="never reaches"):
         first_rise(np.zeros(10), 1e-3, 1e-2)
+    # the maximum named is the one after the fall below p_lo, not a fast stage's before it
+    with pytest.raises(JammingFitError, match=r"max 0\.004\)"):
+        first_rise(np.array([6e-3, 4e-3, 7e-4, 2e-3, 4e-3]), 1e-3, 5e-3)
     with pytest.raises(JammingFitError, match="starts jammed"):
         first_rise(np.linspace(0.02, 0.05, 10), 1e-3, 1e-2)
     with pytest.raises(ValueError, match="0 < p_lo < p_hi"):
