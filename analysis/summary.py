@@ -126,14 +126,15 @@ def z_at_jamming(curves: pd.DataFrame, phi_j: float, p_max: float) -> dict:
     jamming-fit window: the first rise, where ``phi_J`` was fitted), and at least the
     first two such frames (a local line: further up, ``z(phi)`` bends).
     From two or more, ``z_j``, ``z_j_bonds``, ``z_j_with_rattlers`` and
-    ``rattler_fraction_j`` are the least-squares line through them in ``phi`` at ``phi_J``, as ``phi_J`` is the line
-    ``p(phi)`` of the same rise at ``p = 0`` (with the standard error of the intercept
-    from three frames on; the fraction clipped to [0, 1]); ``phi_at_z_j = phi_J``. With
-    one frame, that frame's values at its own ``phi_at_z_j``; with none, NaN.
-    ``s_nematic_j``, which every frame has, is interpolated linearly at ``phi_J``; the
-    contact number with rattlers is not, since it jumps at ``phi_J`` (a frame just below
-    holds the flowing packing's few contacts). ``z_j_frames``: the frames used. Below ``phi_J`` the packing
-    flows: the limit is taken from above. (The first frame above ``phi_J`` that keeps a
+    ``rattler_fraction_j`` are the least-squares line through them in ``phi`` at
+    ``phi_J``, as ``phi_J`` is the line ``p(phi)`` of the same rise at ``p = 0`` (with the
+    standard error of the intercept from three frames on; the fraction clipped to
+    [0, 1]); ``phi_at_z_j = phi_J``. With one frame, that frame's values at its own
+    ``phi_at_z_j``; with none, NaN. ``s_nematic_j``, which every frame has, is
+    interpolated linearly at ``phi_J``; the contact number with rattlers is not, since it
+    jumps at ``phi_J`` (a frame just below holds the flowing packing's few contacts).
+    ``z_j_frames``: the frames used. Below ``phi_J`` the packing flows: the limit is
+    taken from above. (The first frame above ``phi_J`` that keeps a
     backbone, read as it is, may lie far above jamming and overstate ``z_J``:
     docs/analysis.md.)
     """
