@@ -49,13 +49,15 @@ def _pysim(case_path: Path, data: Path, out: Path, threads: int, timeout: float)
     import pysim
 
     cmd = engines.pysim.command(case_path, data, out, threads)
-    # resume only a checkpoint of this very case and start (a changed case starts over)
+    # resume only a checkpoint of this very case and start (a changed case starts over,
+    # one changed only in when it stops goes on); keep only a finish of this very case
     stamp = engines.resume_stamp("pysim", load_case(case_path), data)
     stamp_path = out / "resume.json"
-    same = stamp_path.exists() and json.loads(stamp_path.read_text()) == stamp
+    stored = json.loads(stamp_path.read_text()) if stamp_path.exists() else None
     done = out / FINISHED
-    if not (same and done.exists() and all((out / name).exists() for name in COMMON)):
+    if not (stored == stamp and done.exists() and all((out / n).exists() for n in COMMON)):
         done.unlink(missing_ok=True)
+        same = stored is not None and engines.resumable(stored, stamp)
         _run_pysim(cmd, out, stamp, same, threads, timeout)
         os.replace(out / "run.json", done)  # the runner writes run.json, once checked
     # else pysim had finished when a stop signal reached the runner: its record stands
@@ -71,13 +73,13 @@ def _run_pysim(cmd: list, out: Path, stamp: dict, same: bool, threads: int,
     """Start (or resume) pysim, which writes its record to ``out/run.json``."""
     from rodcase.files import atomic_write_text
 
-    stamp_path = out / "resume.json"
     if (out / "checkpoint.npz").exists() and same:
         cmd.append("--resume")
     else:
         for stale in [out / "checkpoint.npz", *out.glob("*.part")]:
             stale.unlink(missing_ok=True)
-        atomic_write_text(stamp_path, json.dumps(stamp))
+    # a resumed run takes the stamp of its new stop keys
+    atomic_write_text(out / "resume.json", json.dumps(stamp))
     log = out / "pysim.log"
     env = dict(os.environ, NUMBA_NUM_THREADS=str(threads))
     with open(log, "w") as fh:

@@ -286,3 +286,53 @@ def test_run_finished_before_the_stop_is_recorded_not_rerun(tmp_path):
     assert not (out / "pysim.log").exists()  # pysim did not run again
     assert not (out / runner.FINISHED).exists()
     assert rec["steps"] > 0
+
+
+@pytest.mark.slow
+def test_compression_with_a_later_phi_final_goes_on_and_a_finished_one_reruns(tmp_path):
+    """A compression stopped mid-run and given a later ``phi_final`` (a stop key,
+    workflows.engines.restarts.STOP_KEYS) resumes from its checkpoint and ends with the
+    files of an uninterrupted run to that ``phi_final``; a finished run whose stop keys
+    changed runs again from the start. Any other change of the case is not resumable."""
+    from workflows import engines, runner
+    from rodcase.case import validate_case
+    from pysim.initial import write_initial
+    from tests.cases import PYSIM_COMPRESS
+    from tests.runs import pysim_run, start_mid_run
+
+    def case_of(**protocol):
+        return validate_case({**PYSIM_COMPRESS,
+                              "protocol": {**PYSIM_COMPRESS["protocol"], **protocol}})
+
+    short, full = case_of(phi_final=0.62), case_of()
+    data = tmp_path / "init.data"
+    write_initial(full, data)
+    stamp_short = engines.resume_stamp("pysim", short, data)
+    assert stamp_short != engines.resume_stamp("pysim", full, data)
+    assert engines.resumable(stamp_short, engines.resume_stamp("pysim", full, data))
+    assert not engines.resumable(stamp_short,
+                                 engines.resume_stamp("pysim", case_of(rate=0.03), data))
+    paths = {}
+    for name, case in (("short", short), ("full", full)):
+        paths[name] = tmp_path / f"{name}.yaml"
+        paths[name].write_text(yaml.safe_dump(case))
+    ref = tmp_path / "ref"
+    subprocess.run(pysim_run(paths["full"], data, ref), check=True, capture_output=True)
+
+    out = tmp_path / "run"
+    proc = start_mid_run(paths["short"], data, out)
+    proc.send_signal(signal.SIGINT)
+    proc.communicate(timeout=60)
+    assert not (out / "run.json").exists(), "the run finished before it could be stopped"
+    (out / "resume.json").write_text(json.dumps(stamp_short))  # as the runner writes it
+    rec = runner.run("pysim", paths["full"], data, out, timeout=600)
+    assert rec["status"] == "ok", rec.get("error")
+    assert rec["resumed"]
+    for name in ("thermo.dat", "particles.dump"):
+        assert (out / name).read_bytes() == (ref / name).read_bytes(), name
+
+    rec = runner.run("pysim", paths["short"], data, out, timeout=600)
+    assert rec["status"] == "ok", rec.get("error")
+    assert not rec["resumed"]
+    thermo = pd.read_csv(out / "thermo.dat", sep=r"\s+", comment="#", header=None)
+    assert thermo.iloc[-1, 2] == pytest.approx(0.62, abs=1e-3)

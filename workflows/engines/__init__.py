@@ -38,6 +38,7 @@ from workflows.engines.liggghts import (E_MIN, LIGGGHTS_TAP_WALLS, MULTISPHERE_W
                                         settle_plan)
 from workflows.engines.restarts import (KEEP_RESTARTS, RESTART_DUMPS,
                                         cut_outputs, latest_restart, prune_restarts,
-                                        restart_interval, restart_is_complete, resume_stamp)
+                                        restart_interval, restart_is_complete, resumable,
+                                        resume_stamp)
 from workflows.engines.table import (ADAPTERS, ENGINES, PROTOCOLS, Adapter, deck, deck_vars,
                                      lookup, settles, supports)

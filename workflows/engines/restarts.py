@@ -26,23 +26,39 @@ PRUNE_SECONDS = 10.0
 
 
 #: keys of a pysim protocol that only say when a run stops, not how it moves: a run whose
-#: case changed in them alone resumes (a later max_time goes on; a looser ke_ratio stops
-#: at the first settling check after the checkpoint that meets it, which may be later than
-#: where a run started afresh would stop)
-STOP_KEYS = {"deposit": ("max_time", "ke_ratio")}
+#: case changed in them alone resumes from its checkpoint (a later max_time or phi_final
+#: goes on along the same trajectory; a looser ke_ratio stops at the first settling check
+#: after the checkpoint that meets it, which may be later than where a run started afresh
+#: would stop). A finished run whose stop keys changed runs again.
+STOP_KEYS = {"deposit": ("max_time", "ke_ratio"),
+             # compress: phi_final sets only the end of the last stage, not its rate
+             "compress": ("phi_final", "pressure_final")}
 
 
 def resume_stamp(engine: str, case: dict, data) -> dict:
     """What identifies a run for resuming (``resume.json``): engine, case hash (for pysim
-    without the protocol's :data:`STOP_KEYS`) and the initial data's hash."""
+    without the protocol's :data:`STOP_KEYS`), the initial data's hash and, where the
+    protocol has stop keys, their values (``stops``)."""
     from rodcase.case import case_hash
 
     stops = STOP_KEYS.get(case["protocol"]["name"], ()) if engine == "pysim" else ()
+    values = {k: case["protocol"].get(k) for k in stops}
     if stops:
         case = {**case, "protocol": {k: v for k, v in case["protocol"].items()
                                      if k not in stops}}
-    return {"engine": engine, "case_hash": case_hash(case),
-            "data": hashlib.sha256(Path(data).read_bytes()).hexdigest()}
+    stamp = {"engine": engine, "case_hash": case_hash(case),
+             "data": hashlib.sha256(Path(data).read_bytes()).hexdigest()}
+    if stops:
+        stamp["stops"] = values
+    return stamp
+
+
+def resumable(stored: dict, stamp: dict) -> bool:
+    """Whether a run stamped ``stored`` may go on under ``stamp``: the same run but for
+    its stop keys (:data:`STOP_KEYS`)."""
+    def bare(s: dict) -> dict:
+        return {k: v for k, v in s.items() if k != "stops"}
+    return bare(stored) == bare(stamp)
 
 
 def restart_interval(case: dict) -> int:
